@@ -1,0 +1,31 @@
+#pragma once
+
+#include "rgbdmap/back_projector.hpp"
+#include "rgbdmap/config.hpp"
+#include "rgbdmap/depth_filter.hpp"
+#include "rgbdmap/frame.hpp"
+#include "rgbdmap/run_stats.hpp"
+#include "rgbdmap/voxel_map.hpp"
+
+namespace rgbdmap {
+
+// One keyframe into the map: filter the depth image, back-project with the pose, optionally
+// remove statistical outliers, fuse into the voxel map. Buffers are kept between keyframes.
+class KeyframeIntegrator {
+ public:
+  explicit KeyframeIntegrator(const Config& config);
+  void integrate(const Frame& frame, VoxelMap& map, RunStats& stats);
+
+ private:
+  void removeStatisticalOutliers();
+
+  DepthFilter filter_;
+  BackProjector projector_;
+  bool statistical_ = false;
+  int sor_mean_k_ = 50;
+  double sor_stddev_ = 1.0;
+  cv::Mat depth_, scratch_;
+  PointBatch batch_, kept_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,60 @@
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+namespace rgbdmap {
+
+// Latency distribution in fixed logarithmic bins (1 µs .. ~100 s), so recording a sample never
+// allocates. Percentiles are accurate to the bin width (~2.3%). Written by one thread.
+class LatencyHistogram {
+ public:
+  void record(double seconds);
+  double percentile(double q) const;  // q in [0, 1]; seconds; 0 when empty
+  std::uint64_t count() const { return count_; }
+  double mean() const { return count_ ? sum_ / static_cast<double>(count_) : 0.0; }
+  double max() const { return max_; }
+
+ private:
+  static constexpr int kBins = 800;
+  std::array<std::uint64_t, kBins> bins_{};
+  std::uint64_t count_ = 0;
+  double sum_ = 0.0;
+  double max_ = 0.0;
+};
+
+// Counters shared by the capture, mapping and status threads (atomics), and per-stage latency
+// histograms owned by the mapping thread (read only after it has stopped).
+struct RunStats {
+  std::atomic<std::uint64_t> frames_captured{0};   // delivered by the source
+  std::atomic<std::uint64_t> frames_skipped{0};    // unusable captures (bad image, size)
+  std::atomic<std::uint64_t> frames_dropped{0};    // discarded because mapping fell behind
+  std::atomic<std::uint64_t> frames_processed{0};  // taken by the mapping thread
+  std::atomic<std::uint64_t> frames_without_pose{0};
+  std::atomic<std::uint64_t> keyframes{0};
+  std::atomic<std::uint64_t> map_points{0};
+  std::atomic<std::uint64_t> checkpoints_written{0};
+  std::atomic<std::uint64_t> checkpoints_failed{0};
+  std::atomic<std::uint64_t> queue_depth{0};
+  std::atomic<std::uint64_t> disconnects{0};
+
+  LatencyHistogram read_latency;       // capture: read + decode + convert
+  LatencyHistogram filter_latency;     // mapping: depth filtering
+  LatencyHistogram project_latency;    // back-projection (+ statistical filter when enabled)
+  LatencyHistogram fuse_latency;       // voxel fusion
+  LatencyHistogram integrate_latency;  // whole keyframe integration
+  LatencyHistogram pose_latency;       // pose estimation
+  LatencyHistogram queue_latency;      // capture-to-mapping: time a frame waited in the queue
+
+  double wall_seconds = 0.0;
+  double peak_rss_mb = 0.0;
+
+  std::string toJson() const;
+};
+
+// Peak resident set size of this process in MB (VmHWM), 0 if unknown.
+double peakRssMb();
+
+}  // namespace rgbdmap

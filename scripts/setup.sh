@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs every Debian package rgbdmap needs to build, test and render maps.
+# Run as root (CI does); uses sudo when it is available and we are not root.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libpcl-dev libopencv-dev libopencv-contrib-dev libeigen3-dev
+  libopenni2-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
+  libboost-dev libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev
+  libtsl-hopscotch-map-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all packages present"
+  exit 0
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update
+$SUDO apt-get install -y --no-install-recommends "${missing[@]}"
