@@ -32,7 +32,10 @@ class FrameSource {
   virtual std::string describe() const = 0;
   // Frames the source itself had to skip (missing/corrupt images, no ground truth, ...).
   virtual std::uint64_t skipped() const { return 0; }
-  // Tries to reconnect a live camera after kTimeout; sources that cannot return false.
+  // Whether a kTimeout may be followed by a reconnect (a live camera that was unplugged).
+  virtual bool canReconnect() const { return false; }
+  // One attempt to get the same camera back after kTimeout; may block for up to about a second.
+  // Returns true when frames can be read again.
   virtual bool reconnect() { return false; }
 };
 

@@ -97,8 +97,18 @@ int Pipeline::run(RunControl& control) {
           continue;  // keep the slot for the next read
         }
         if (status == ReadStatus::kTimeout) {
-          if (source_->reconnect()) continue;
-          throw InputError(source_->describe() + ": camera stopped delivering frames");
+          if (!source_->canReconnect())
+            throw InputError(source_->describe() + ": camera stopped delivering frames");
+          // Keep everything mapped: checkpoint now, then wait for the same camera.
+          stats_.disconnects.fetch_add(1);
+          control.snapshot.store(true);
+          spdlog::warn("{}: camera stopped delivering frames; map checkpointed, waiting for it "
+                       "to come back (Ctrl-C saves and quits)",
+                       source_->describe());
+          while (!control.stop.load() && !source_->reconnect()) {
+          }
+          if (!control.stop.load()) spdlog::info("{}: camera is back, mapping resumes", source_->describe());
+          continue;
         }
         stats_.read_latency.record(std::chrono::duration<double>(Clock::now() - read_start).count());
         frame->index = index++;
