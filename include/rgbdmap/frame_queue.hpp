@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <boost/lockfree/queue.hpp>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <cstddef>
@@ -37,8 +38,9 @@ class FrameQueue {
   // No more frames will come; the consumer drains what is queued, then pop() returns nullptr.
   void close();
 
-  // Consumer side. Waits for the next frame; nullptr when closed and drained.
-  Frame* pop();
+  // Consumer side. Waits up to `timeout` for the next frame; nullptr on timeout or, with
+  // `finished` set, when the queue is closed and drained.
+  Frame* pop(std::chrono::milliseconds timeout, bool& finished);
   // Returns a frame taken with pop() to the pool.
   void release(Frame* frame);
 

@@ -63,14 +63,18 @@ void FrameQueue::abort() {
   closed_.store(true);
 }
 
-Frame* FrameQueue::pop() {
+Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
+  finished = false;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
   Frame* frame = nullptr;
   while (!filled_.pop(frame)) {
     if (closed_.load()) {
       // The producer may have pushed just before closing: look once more.
       if (filled_.pop(frame)) break;
+      finished = true;
       return nullptr;
     }
+    if (std::chrono::steady_clock::now() >= deadline) return nullptr;
     backoff();
   }
   queued_.fetch_sub(1);

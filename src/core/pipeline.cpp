@@ -131,16 +131,20 @@ int Pipeline::run(RunControl& control) {
   std::thread mapping([&] {
     double last_checkpoint = now();
     std::uint64_t keyframes_at_checkpoint = 0;
-    while (Frame* frame = queue.pop()) {
-      stats_.queue_latency.record(now() - frame->captured_at);
-      stats_.frames_processed.fetch_add(1);
-      try {
-        mapper.process(*frame);
-      } catch (const std::exception& e) {
-        error.set(std::string(frame->origin) + ": " + e.what());
-        control.stop.store(true);
+    bool finished = false;
+    while (!finished) {
+      // Frames may stop coming (camera unplugged), so wake up regularly for checkpoints.
+      if (Frame* frame = queue.pop(std::chrono::milliseconds(100), finished)) {
+        stats_.queue_latency.record(now() - frame->captured_at);
+        try {
+          mapper.process(*frame);
+        } catch (const std::exception& e) {
+          error.set(std::string(frame->origin) + ": " + e.what());
+          control.stop.store(true);
+        }
+        queue.release(frame);
+        stats_.frames_processed.fetch_add(1);
       }
-      queue.release(frame);
       const std::uint64_t keyframes = stats_.keyframes.load();
       const bool by_count = config_.checkpoint_every_keyframes > 0 &&
                             keyframes - keyframes_at_checkpoint >=
