@@ -22,3 +22,29 @@ int run(const std::string& command, std::string* output = nullptr);
 MapCloud loadMap(const std::string& path);
 
 }  // namespace rgbdmap::test
+
+namespace rgbdmap::test {
+
+// A child process started with posix_spawn (stdout+stderr to `log_path`), for tests that send
+// signals to a running rgbdmap.
+class Process {
+ public:
+  Process(const std::vector<std::string>& argv, const std::string& log_path);
+  ~Process();  // kills the child if it is still running
+  int pid() const { return pid_; }
+  void signal(int sig) const;
+  // Exit code (or 128 + signal); waits at most timeout_s, then kills and returns -1.
+  int wait(double timeout_s = 120.0);
+  bool running();
+
+ private:
+  int pid_ = -1;
+  int status_ = -1;
+  bool reaped_ = false;
+};
+
+std::string readFile(const std::string& path);
+// Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
+std::string copySequence(const std::string& source, const std::string& target);
+
+}  // namespace rgbdmap::test

@@ -34,7 +34,9 @@ std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<dou
     used_first[i] = used_second[j] = true;
     matches.emplace_back(i, j);
   }
-  std::sort(matches.begin(), matches.end());
+  std::sort(matches.begin(), matches.end(), [&](const auto& x, const auto& y) {
+    return first[x.first] < first[y.first];
+  });
   return matches;
 }
 
