@@ -1,0 +1,86 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "rgbdmap/config.hpp"
+#include "rgbdmap/error.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+std::string messageOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, SetsKeysFromText) {
+  Config c;
+  c.set("map.voxel_size", "0.005", "--set");
+  c.set("keyframe.every_n", "3", "--set");
+  c.set("filter.undistort", "false", "--set");
+  c.set("keyframe.policy", "both", "--set");
+  EXPECT_DOUBLE_EQ(c.voxel_size, 0.005);
+  EXPECT_EQ(c.keyframe_every_n, 3);
+  EXPECT_FALSE(c.undistort);
+  EXPECT_EQ(c.keyframe_policy, "both");
+}
+
+TEST(Config, RejectsUnknownKeysAndBadValuesNamingTheKey) {
+  Config c;
+  EXPECT_NE(messageOf([&] { c.set("map.voxelsize", "0.01", "--set"); }).find("unknown config key 'map.voxelsize'"),
+            std::string::npos);
+  const std::string range = messageOf([&] { c.set("map.voxel_size", "-1", "--set"); });
+  EXPECT_NE(range.find("map.voxel_size"), std::string::npos);
+  EXPECT_NE(range.find("outside"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("keyframe.every_n", "ten", "--set"); }).find("not an integer"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("keyframe.every_n", "0", "--set"); }).find("keyframe.every_n"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("pose.source", "magic", "--set"); }).find("not one of"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("filter.min_depth", "9", "--set"); }).find("below filter.max_depth"), std::string::npos);
+  EXPECT_DOUBLE_EQ(c.voxel_size, 0.01);  // a rejected value leaves the old one
+}
+
+TEST(Config, YamlErrorsNameFileAndLine) {
+  const std::string dir = test::freshDir();
+  const std::string path = dir + "/bad.yaml";
+  std::ofstream(path) << "map:\n  voxel_size: 0.02\n  colour_mode: fancy\n";
+  Config c;
+  const std::string message = messageOf([&] { c.loadYaml(path); });
+  EXPECT_NE(message.find(path + ":3"), std::string::npos) << message;
+  EXPECT_NE(message.find("map.colour_mode"), std::string::npos) << message;
+
+  std::ofstream(path) << "map: [unclosed\n";
+  EXPECT_NE(messageOf([&] { c.loadYaml(path); }).find("invalid YAML"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.loadYaml(dir + "/missing.yaml"); }).find("cannot open"), std::string::npos);
+}
+
+TEST(Config, PresetsLoadAndEffectiveConfigRoundTrips) {
+  for (const char* preset : {"default", "tum_fr1", "tum_fr2", "tum_fr3"}) {
+    Config c;
+    EXPECT_NO_THROW(c.loadPreset(preset)) << preset;
+  }
+  Config fr1;
+  fr1.loadPreset("tum_fr1");
+  EXPECT_DOUBLE_EQ(fr1.camera.fx, 517.3);
+  EXPECT_DOUBLE_EQ(fr1.camera.k3, 1.1633);
+  fr1.set("map.voxel_size", "0.004", "--set");
+  const std::string dir = test::freshDir();
+  std::ofstream(dir + "/effective.yaml") << fr1.toYaml();
+  Config reloaded;
+  reloaded.loadYaml(dir + "/effective.yaml");
+  const auto original_keys = fr1.keys();
+  const auto reloaded_keys = reloaded.keys();
+  ASSERT_EQ(original_keys.size(), reloaded_keys.size());
+  for (std::size_t i = 0; i < original_keys.size(); ++i)
+    EXPECT_EQ(reloaded_keys[i].get(), original_keys[i].get()) << original_keys[i].name;
+  EXPECT_DOUBLE_EQ(reloaded.voxel_size, 0.004);
+  EXPECT_DOUBLE_EQ(reloaded.camera.cy, 255.3);
+  EXPECT_NE(messageOf([] { Config().loadPreset("tum_fr9"); }).find("unknown preset"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rgbdmap
