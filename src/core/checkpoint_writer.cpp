@@ -41,7 +41,7 @@ bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::str
       status = pcl::io::savePCDFileBinary(tmp, cloud);
     }
   } catch (const std::exception& e) {
-    error = path + ": cannot write map (" + e.what() + ")";
+    error = path + ": cannot write map: " + std::strerror(errno) + " (" + e.what() + ")";
     std::remove(tmp.c_str());
     return false;
   }
