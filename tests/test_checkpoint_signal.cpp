@@ -1,0 +1,155 @@
+// Checkpoints and signals: SIGUSR1 writes a complete map while mapping goes on, SIGINT stops
+// with a final save, and no signal ever leaves a partial file at the destination.
+#include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <random>
+#include <thread>
+
+#include "rgbdmap/checkpoint_writer.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+
+std::vector<std::string> replayArgs(const std::string& dir, const std::string& rate) {
+  return {test::binary(), "--source", "tum:" + test::tumDir(kRpy), "--out", dir + "/map.pcd",
+          "--rate", rate, "--no-render", "--stats", dir + "/stats.json",
+          "--set", "checkpoint.every_keyframes=0", "--set", "checkpoint.every_seconds=0"};
+}
+
+bool waitFor(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(10ms);
+  }
+  return true;
+}
+
+TEST(CheckpointSignal, Sigusr1WritesCompleteMapWhileMapping) {
+  const std::string dir = test::freshDir();
+  // Half speed: 100 frames take ~6.6 s, long enough to observe a checkpoint mid-run.
+  test::Process p(replayArgs(dir, "0.5"), dir + "/log.txt");
+  ASSERT_GT(p.pid(), 0);
+  ASSERT_TRUE(waitFor([&] { return test::readFile(dir + "/log.txt").find("keyframes") != std::string::npos ||
+                                   test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; },
+                      20s));
+  std::this_thread::sleep_for(1500ms);
+  p.signal(SIGUSR1);
+  ASSERT_TRUE(waitFor([&] { return fs::exists(dir + "/map.pcd"); }, 5s)) << test::readFile(dir + "/log.txt");
+  const bool still_running = p.running();
+  MapCloud checkpoint;
+  ASSERT_EQ(pcl::io::loadPCDFile(dir + "/map.pcd", checkpoint), 0);
+  EXPECT_GT(checkpoint.size(), 1000u);
+  EXPECT_EQ(checkpoint.size(), static_cast<std::size_t>(checkpoint.width) * checkpoint.height);
+  EXPECT_TRUE(still_running) << "the checkpoint should come while mapping goes on";
+  EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
+  const MapCloud final_map = test::loadMap(dir + "/map.pcd");
+  EXPECT_GE(final_map.size(), checkpoint.size());
+  EXPECT_NE(test::readFile(dir + "/log.txt").find("SIGUSR1: writing a checkpoint"), std::string::npos);
+  EXPECT_NE(test::readFile(dir + "/stats.json").find("\"checkpoints_written\": 2,"), std::string::npos)
+      << test::readFile(dir + "/stats.json");  // the SIGUSR1 one and the final save
+}
+
+TEST(CheckpointSignal, SigintStopsDrainsAndSaves) {
+  const std::string dir = test::freshDir();
+  test::Process p(replayArgs(dir, "1"), dir + "/log.txt");
+  ASSERT_TRUE(waitFor([&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 20s));
+  std::this_thread::sleep_for(1000ms);
+  p.signal(SIGINT);
+  EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
+  const MapCloud map = test::loadMap(dir + "/map.pcd");
+  EXPECT_GT(map.size(), 1000u);
+  const std::string stats = test::readFile(dir + "/stats.json");
+  // Stopped early: fewer than all 100 frames were read, and every frame read was processed.
+  const auto value = [&](const std::string& key) {
+    return std::stol(stats.substr(stats.find("\"" + key + "\": ") + key.size() + 4));
+  };
+  EXPECT_LT(value("frames_captured"), 100);
+  EXPECT_EQ(value("frames_processed"), value("frames_captured") - value("frames_dropped"));
+  EXPECT_TRUE(fs::exists(dir + "/map_keyframes.txt"));
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST(CheckpointSignal, PeriodicCheckpointsByKeyframeCount) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  const int code = test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+                                 "/map.pcd --rate max -q --no-render --stats " + dir +
+                                 "/stats.json --set checkpoint.every_keyframes=3 --set checkpoint.every_seconds=0",
+                             &output);
+  ASSERT_EQ(code, 0) << output;
+  // 10 keyframes: checkpoints after keyframes 3, 6 and 9, then the final save. The writer keeps
+  // only the newest pending snapshot, so a fast replay may merge some: between 2 and 4.
+  const std::string stats = test::readFile(dir + "/stats.json");
+  const long written = std::stol(stats.substr(stats.find("\"checkpoints_written\": ") + 23));
+  EXPECT_GE(written, 2);
+  EXPECT_LE(written, 4);
+}
+
+// A child process writes a large map over and over and is killed at random moments: the
+// destination must always be absent or a complete map, never a partial file.
+TEST(CheckpointSignal, KilledWriterNeverLeavesPartialFile) {
+  const std::string dir = test::freshDir();
+  const std::string path = dir + "/map.pcd";
+  MapCloud cloud;
+  cloud.resize(1500000);
+  for (std::size_t i = 0; i < cloud.size(); ++i) cloud[i].x = static_cast<float>(i);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> delay_ms(1, 120);
+  int complete_seen = 0;
+  for (int round = 0; round < 12; ++round) {
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      std::string error;
+      for (;;)
+        if (!writePcdAtomically(cloud, path, error)) ::_exit(3);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng) * (round + 1) / 2));
+    ::kill(child, round % 2 ? SIGKILL : SIGTERM);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    if (fs::exists(path)) {
+      MapCloud loaded;
+      ASSERT_EQ(pcl::io::loadPCDFile(path, loaded), 0) << "round " << round;
+      ASSERT_EQ(loaded.size(), cloud.size()) << "round " << round;
+      ++complete_seen;
+    }
+    for (const auto& entry : fs::directory_iterator(dir))
+      if (entry.path() != path) fs::remove(entry.path());  // the killed writer's temp file
+  }
+  EXPECT_GT(complete_seen, 0);
+}
+
+TEST(CheckpointSignal, SecondSigintQuitsWithoutPartialFile) {
+  const std::string dir = test::freshDir();
+  test::Process p(replayArgs(dir, "1"), dir + "/log.txt");
+  ASSERT_TRUE(waitFor([&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 20s));
+  std::this_thread::sleep_for(800ms);
+  p.signal(SIGINT);
+  std::this_thread::sleep_for(5ms);
+  p.signal(SIGINT);
+  const int code = p.wait();
+  EXPECT_TRUE(code == 130 || code == 0) << code;
+  if (fs::exists(dir + "/map.pcd")) {
+    MapCloud map;
+    EXPECT_EQ(pcl::io::loadPCDFile(dir + "/map.pcd", map), 0);
+  }
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+}  // namespace
+}  // namespace rgbdmap
