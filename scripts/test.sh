@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs dependencies, builds, and runs the test suite three times: a release build, the
+# threaded tests under ThreadSanitizer, and the whole suite under AddressSanitizer + UBSan.
+# Usage: bash scripts/test.sh [--quick]   (--quick: release build only)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+bash scripts/setup.sh
+jobs=$(nproc)
+
+build() {  # build <dir> [cmake args...]
+  local dir=$1
+  shift
+  cmake -S . -B "$dir" -G Ninja "$@" >/dev/null
+  cmake --build "$dir" -j "$jobs"
+}
+
+section() { printf '\n==== %s (%s)\n' "$1" "$(date +%T)"; }
+
+section "release build and tests"
+build build -DCMAKE_BUILD_TYPE=Release
+ctest --test-dir build --output-on-failure -j "$jobs" --timeout 900
+[ "${1:-}" = "--quick" ] && exit 0
+
+section "ThreadSanitizer: threaded tests"
+build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDMAP_SANITIZE=thread -DRGBDMAP_BUILD_BENCH=OFF
+TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$root/tests/tsan.supp" \
+  ctest --test-dir build-tsan --output-on-failure -j "$jobs" -L threads --timeout 1800
+
+section "AddressSanitizer + UBSan: all tests"
+build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDMAP_SANITIZE=address -DRGBDMAP_BUILD_BENCH=OFF
+ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" \
+  LSAN_OPTIONS="suppressions=$root/tests/lsan.supp print_suppressions=0" \
+  UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1" \
+  ctest --test-dir build-asan --output-on-failure -j "$jobs" --timeout 1800
+section "all test runs passed"
