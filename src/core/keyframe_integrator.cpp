@@ -26,6 +26,7 @@ DepthFilter makeFilter(const Config& c) {
 
 KeyframeIntegrator::KeyframeIntegrator(const Config& config)
     : filter_(makeFilter(config)),
+      smoother_{config.smooth_radius, config.edge_jump, 0.75},
       projector_(config.camera, config.undistort),
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
@@ -42,6 +43,7 @@ void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& 
   const auto start = std::chrono::steady_clock::now();
   frame.depth.copyTo(depth_);
   filter_.apply(depth_, scratch_);
+  smoother_.apply(depth_, inverse_, valid_, sum_, count_, low_, high_);
   stats.filter_latency.record(secondsSince(start));
 
   const auto project_start = std::chrono::steady_clock::now();

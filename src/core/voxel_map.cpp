@@ -35,13 +35,22 @@ Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
 }
 
 void VoxelMap::integrate(const PointBatch& batch) {
+  // Neighbouring pixels usually fall into the same voxel, so the last voxel is remembered and
+  // the hash lookup skipped for runs of equal keys. The pointer is refreshed after every lookup,
+  // because an insertion may move the map's elements.
+  std::uint64_t cached_key = 0;
+  Voxel* cached = nullptr;
   for (std::size_t i = 0; i < batch.size(); ++i) {
     std::uint64_t key;
     if (!keyFor(batch.positions[i], key)) {
       ++rejected_;
       continue;
     }
-    Voxel& v = voxels_[key];
+    if (!cached || key != cached_key) {
+      cached = &voxels_[key];
+      cached_key = key;
+    }
+    Voxel& v = *cached;
     const float w = batch.weights[i];
     const float total = v.weight + w;
     const float alpha = w / total;

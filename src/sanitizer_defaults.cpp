@@ -1,0 +1,33 @@
+// Sanitizer defaults compiled into every rgbdmap executable. They only matter in sanitizer
+// builds; in others the functions are never called.
+//
+// Third-party libraries we link are not instrumented. OpenNI2 locks and unlocks its global
+// mutexes from static constructors/destructors in a way ThreadSanitizer reports as "unlock of an
+// unlocked mutex" at process exit, before any of our code runs; those reports are about
+// OpenNI2's internals, not our threads, so reports whose frames come from it are suppressed.
+// Everything in our own code stays checked.
+
+extern "C" {
+
+const char* __tsan_default_suppressions() {
+  return "called_from_lib:libOpenNI2.so\n"
+         "called_from_lib:libOpenNI.so\n"
+         "called_from_lib:libusb-1.0.so\n"
+         "race:libOpenNI2.so\n"
+         "mutex:libOpenNI2.so\n"
+         "deadlock:libOpenNI2.so\n";
+}
+
+const char* __tsan_default_options() { return "halt_on_error=1 second_deadlock_stack=1"; }
+
+// Libraries that allocate global state once and never free it (not leaks of ours).
+const char* __lsan_default_suppressions() {
+  return "leak:libOpenNI2.so\n"
+         "leak:libOpenNI.so\n"
+         "leak:libusb-1.0.so\n"
+         "leak:libvtk\n"
+         "leak:libfontconfig\n"
+         "leak:libgomp\n";
+}
+
+}  // extern "C"
