@@ -27,11 +27,16 @@ class BackProjector {
   void project(const cv::Mat& depth, const cv::Mat& color_bgr, const Eigen::Isometry3d& pose,
                PointBatch& out) const;
 
+  // Where pixels are much smaller than a voxel, neighbouring (smoothed) pixels add little: below
+  // this depth only pixels with even row and column are projected. 0 projects every pixel.
+  void setSubsampleBelowDepth(float depth) { subsample_below_depth_ = depth; }
+
   int width() const { return width_; }
   int height() const { return height_; }
 
  private:
   int width_, height_;
+  float subsample_below_depth_ = 0.0f;
   std::vector<Eigen::Vector2f> rays_;  // (x/z, y/z) per pixel, row-major
 };
 

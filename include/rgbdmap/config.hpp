@@ -35,6 +35,7 @@ struct Config {
   std::string outlier_filter = "fast";  // filter.outliers: fast | statistical | none
   double edge_jump = 0.03;  // filter.edge_jump: relative depth jump that marks a flying pixel
   int speck_min_neighbours = 4;  // filter.speck_min_neighbours: of 8, with similar depth
+  bool subsample = true;  // filter.subsample: every 2nd pixel where 2 pixels < half a voxel
   int smooth_radius = 2;         // filter.smooth_radius: inverse-depth averaging window, 0 = off
   int sor_mean_k = 50;           // filter.sor_mean_k
   double sor_stddev = 1.0;       // filter.sor_stddev

@@ -32,9 +32,11 @@ void BackProjector::project(const cv::Mat& depth, const cv::Mat& color_bgr,
     const float* z_row = depth.ptr<float>(v);
     const cv::Vec3b* c_row = color_bgr.ptr<cv::Vec3b>(v);
     const Eigen::Vector2f* ray = rays_.data() + static_cast<std::size_t>(v) * width_;
+    const bool odd_row = (v & 1) != 0;
     for (int u = 0; u < width_; ++u) {
       const float z = z_row[u];
       if (z <= 0.0f) continue;
+      if ((odd_row || (u & 1) != 0) && z < subsample_below_depth_) continue;
       const Eigen::Vector3f p(ray[u].x() * z, ray[u].y() * z, z);
       out.positions.push_back(R * p + t);
       out.colors.emplace_back(c_row[u][2], c_row[u][1], c_row[u][0]);

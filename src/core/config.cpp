@@ -148,6 +148,8 @@ std::vector<Config::Key> Config::keys() {
              "relative depth jump to a neighbour that marks a flying pixel"),
       integer("filter.speck_min_neighbours", &speck_min_neighbours, 0, 8,
               "neighbours (of 8) with similar depth a pixel needs to be kept"),
+      boolean("filter.subsample", &subsample,
+              "fuse every 2nd pixel of each row and column where 2 pixels span under half a voxel"),
       integer("filter.smooth_radius", &smooth_radius, 0, 10,
               "half-size of the edge-aware inverse-depth averaging window (0 = off)"),
       integer("filter.sor_mean_k", &sor_mean_k, 1, 1000, "statistical outlier removal: neighbours"),

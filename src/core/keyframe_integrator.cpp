@@ -2,6 +2,7 @@
 
 #include <pcl/filters/statistical_outlier_removal.h>
 
+#include <algorithm>
 #include <chrono>
 
 namespace rgbdmap {
@@ -31,6 +32,11 @@ KeyframeIntegrator::KeyframeIntegrator(const Config& config)
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
       sor_stddev_(config.sor_stddev) {
+  if (config.subsample) {
+    // A pixel at depth z spans z / f metres; below this depth two of them fit in half a voxel.
+    const double f = std::min(config.camera.fx, config.camera.fy);
+    projector_.setSubsampleBelowDepth(static_cast<float>(config.voxel_size * f / 4.0));
+  }
   const std::size_t pixels = static_cast<std::size_t>(config.camera.width) * config.camera.height;
   for (PointBatch* b : {&batch_, &kept_}) {
     b->positions.reserve(pixels);
