@@ -15,7 +15,11 @@ const char* __tsan_default_suppressions() {
          "called_from_lib:libusb-1.0.so\n"
          "race:libOpenNI2.so\n"
          "mutex:libOpenNI2.so\n"
-         "deadlock:libOpenNI2.so\n";
+         "deadlock:libOpenNI2.so\n"
+         // OpenCV's image decoding asks GDAL, which takes its mutexes in varying order.
+         "called_from_lib:libgdal.so\n"
+         "deadlock:libgdal.so\n"
+         "mutex:libgdal.so\n";
 }
 
 const char* __tsan_default_options() { return "halt_on_error=1 second_deadlock_stack=1"; }

@@ -98,41 +98,6 @@ TEST(CheckpointSignal, PeriodicCheckpointsByKeyframeCount) {
   EXPECT_LE(written, 4);
 }
 
-// A child process writes a large map over and over and is killed at random moments: the
-// destination must always be absent or a complete map, never a partial file.
-TEST(CheckpointSignal, KilledWriterNeverLeavesPartialFile) {
-  const std::string dir = test::freshDir();
-  const std::string path = dir + "/map.pcd";
-  MapCloud cloud;
-  cloud.resize(1500000);
-  for (std::size_t i = 0; i < cloud.size(); ++i) cloud[i].x = static_cast<float>(i);
-  std::mt19937 rng(3);
-  std::uniform_int_distribution<int> delay_ms(1, 120);
-  int complete_seen = 0;
-  for (int round = 0; round < 12; ++round) {
-    const pid_t child = ::fork();
-    ASSERT_GE(child, 0);
-    if (child == 0) {
-      std::string error;
-      for (;;)
-        if (!writePcdAtomically(cloud, path, error)) ::_exit(3);
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng) * (round + 1) / 2));
-    ::kill(child, round % 2 ? SIGKILL : SIGTERM);
-    int status = 0;
-    ::waitpid(child, &status, 0);
-    if (fs::exists(path)) {
-      MapCloud loaded;
-      ASSERT_EQ(pcl::io::loadPCDFile(path, loaded), 0) << "round " << round;
-      ASSERT_EQ(loaded.size(), cloud.size()) << "round " << round;
-      ++complete_seen;
-    }
-    for (const auto& entry : fs::directory_iterator(dir))
-      if (entry.path() != path) fs::remove(entry.path());  // the killed writer's temp file
-  }
-  EXPECT_GT(complete_seen, 0);
-}
-
 TEST(CheckpointSignal, SecondSigintQuitsWithoutPartialFile) {
   const std::string dir = test::freshDir();
   test::Process p(replayArgs(dir, "1"), dir + "/log.txt");

@@ -2,7 +2,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <boost/lockfree/queue.hpp>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <cstddef>
 #include <cstdint>
@@ -20,12 +19,14 @@ enum class QueuePolicy {
 };
 
 // A bounded frame queue between one capture thread and one mapping thread, with the frames
-// drawn from a pool allocated up front, so steady state allocates nothing.
+// drawn from a pool allocated up front, so steady state allocates nothing. Both directions are
+// Boost.Lockfree spsc_queues (filled frames to the mapper, emptied frames back).
 //
-// Filled frames travel through a Boost.Lockfree queue. Dropping the oldest frame needs the
-// producer to pop from the head as well, which Boost's spsc_queue forbids, so the filled-frame
-// queue is Boost's bounded lock-free queue (fixed-size, no allocation after construction);
-// emptied frames go back to the producer through a spsc_queue.
+// kDropOldest keeps the camera from ever waiting: the filled queue can physically hold every
+// frame of the pool, and the consumer, when it pops, discards all but the newest `capacity`
+// queued frames (the oldest ones) and counts them. Only if the mapper stalls so long that the
+// whole pool is queued does the producer capture into a private overflow frame, which is then
+// dropped (counted) instead of queued.
 class FrameQueue {
  public:
   FrameQueue(std::size_t capacity, QueuePolicy policy, int width, int height);
@@ -33,9 +34,9 @@ class FrameQueue {
   // Producer side. acquire() hands out an empty frame to fill; never blocks in kDropOldest.
   // Returns nullptr only after close().
   Frame* acquire();
-  // Queues a filled frame. In kBlock mode waits for room (unless closed).
+  // Queues a frame from acquire(). Never blocks.
   void push(Frame* frame);
-  // No more frames will come; the consumer drains what is queued, then pop() returns nullptr.
+  // No more frames will come; the consumer drains what is queued, then pop() finishes.
   void close();
 
   // Consumer side. Waits up to `timeout` for the next frame; nullptr on timeout or, with
@@ -43,9 +44,6 @@ class FrameQueue {
   Frame* pop(std::chrono::milliseconds timeout, bool& finished);
   // Returns a frame taken with pop() to the pool.
   void release(Frame* frame);
-
-  // Makes a blocked producer give up (used to abort without draining).
-  void abort();
 
   std::size_t capacity() const { return capacity_; }
   std::size_t depth() const {
@@ -58,13 +56,12 @@ class FrameQueue {
   std::size_t capacity_;
   QueuePolicy policy_;
   std::vector<std::unique_ptr<Frame>> storage_;
-  boost::lockfree::queue<Frame*, boost::lockfree::fixed_sized<true>> filled_;
+  boost::lockfree::spsc_queue<Frame*> filled_;
   boost::lockfree::spsc_queue<Frame*> free_;
-  Frame* spare_ = nullptr;  // a dropped frame the producer reuses directly
+  Frame* overflow_ = nullptr;  // kDropOldest: captured into when the pool is exhausted
   std::atomic<std::int64_t> queued_{0};
   std::atomic<std::uint64_t> dropped_{0};
   std::atomic<bool> closed_{false};
-  std::atomic<bool> aborted_{false};
 };
 
 }  // namespace rgbdmap

@@ -118,7 +118,7 @@ int Pipeline::run(RunControl& control) {
         frame = nullptr;
         stats_.frames_dropped.store(queue.dropped());
       }
-      if (frame) queue.release(frame);
+      // A frame still held here stays in the pool's storage; only the mapper returns frames.
     } catch (const std::exception& e) {
       error.set(e.what());
       control.stop.store(true);
