@@ -35,7 +35,7 @@ Eigen::Isometry3d chooseView(const MapCloud& cloud, const Trajectory& trajectory
     if (d.norm() > 1e-6) down = d.normalized();
   }
   // Look slightly downwards onto the scene: tilt forward towards "down".
-  forward = (forward + 0.5 * down).normalized();
+  forward = (forward + 0.25 * down).normalized();
   down = (down - down.dot(forward) * forward);
   down = down.norm() > 1e-6 ? down.normalized() : forward.unitOrthogonal();
   const Eigen::Vector3d right = down.cross(forward).normalized();
