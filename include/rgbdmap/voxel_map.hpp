@@ -68,9 +68,20 @@ class VoxelMap {
   static Eigen::Vector3i unpack(std::uint64_t key);
 
  private:
+  // One keyframe's points summed per voxel before they touch the (large, cache-cold) map: a
+  // frame has several points per voxel, so the map sees one update per voxel instead of one
+  // per point. The weighted mean is associative, so the result is the same.
+  struct FrameSum {
+    Eigen::Vector3f weighted_position = Eigen::Vector3f::Zero();
+    Eigen::Vector3f weighted_color = Eigen::Vector3f::Zero();
+    float weight = 0.0f;
+    std::uint32_t points = 0;
+  };
+
   double voxel_size_;
   float inv_voxel_size_;
   Storage voxels_;
+  tsl::hopscotch_map<std::uint64_t, FrameSum, VoxelKeyHash> frame_sums_;
   std::uint64_t rejected_ = 0;
 };
 

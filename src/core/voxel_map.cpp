@@ -35,11 +35,12 @@ Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
 }
 
 void VoxelMap::integrate(const PointBatch& batch) {
-  // Neighbouring pixels usually fall into the same voxel, so the last voxel is remembered and
-  // the hash lookup skipped for runs of equal keys. The pointer is refreshed after every lookup,
-  // because an insertion may move the map's elements.
+  frame_sums_.clear();
+  // Neighbouring pixels usually fall into the same voxel, so the last sum is remembered and
+  // the lookup skipped for runs of equal keys. The pointer is refreshed after every lookup,
+  // because an insertion may move the table's elements.
   std::uint64_t cached_key = 0;
-  Voxel* cached = nullptr;
+  FrameSum* cached = nullptr;
   for (std::size_t i = 0; i < batch.size(); ++i) {
     std::uint64_t key;
     if (!keyFor(batch.positions[i], key)) {
@@ -47,17 +48,23 @@ void VoxelMap::integrate(const PointBatch& batch) {
       continue;
     }
     if (!cached || key != cached_key) {
-      cached = &voxels_[key];
+      cached = &frame_sums_[key];
       cached_key = key;
     }
-    Voxel& v = *cached;
     const float w = batch.weights[i];
-    const float total = v.weight + w;
-    const float alpha = w / total;
-    v.position += alpha * (batch.positions[i] - v.position);
-    v.color += alpha * (batch.colors[i] - v.color);
+    cached->weighted_position += w * batch.positions[i];
+    cached->weighted_color += w * batch.colors[i];
+    cached->weight += w;
+    ++cached->points;
+  }
+  for (const auto& [key, sum] : frame_sums_) {
+    Voxel& v = voxels_[key];
+    const float total = v.weight + sum.weight;
+    const float alpha = sum.weight / total;
+    v.position += alpha * (sum.weighted_position / sum.weight - v.position);
+    v.color += alpha * (sum.weighted_color / sum.weight - v.color);
     v.weight = total;
-    ++v.observations;
+    v.observations += sum.points;
   }
 }
 
