@@ -4,7 +4,6 @@
 
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
-#include <regex>
 
 #include "rgbdmap/association.hpp"
 #include "rgbdmap/error.hpp"
@@ -89,13 +88,14 @@ std::size_t TumSequence::framesWithoutPose() const {
 }
 
 std::string TumSequence::presetForFolder(const std::string& folder) {
-  static const std::regex kFreiburg("freiburg([123])");
-  std::smatch match;
   std::string name = folder;
   while (name.size() > 1 && name.back() == '/') name.pop_back();
   name = name.substr(name.find_last_of('/') + 1);  // npos + 1 == 0: no slash, whole string
-  if (std::regex_search(name, match, kFreiburg)) return "tum_fr" + match[1].str();
-  return "";
+  const std::string kCamera = "freiburg";
+  const auto at = name.find(kCamera);
+  if (at == std::string::npos || at + kCamera.size() >= name.size()) return "";
+  const char n = name[at + kCamera.size()];
+  return (n >= '1' && n <= '3') ? std::string("tum_fr") + n : "";
 }
 
 bool TumSequence::readImage(const std::string& path, int flags, cv::Mat& out,
