@@ -1,0 +1,199 @@
+#include "tum_device.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <utility>
+
+#include "color_stream.hpp"
+#include "depth_stream.hpp"
+#include "driver_log.hpp"
+#include "property_value.hpp"
+
+namespace rgbdmap::openni2_tum {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The first pair of a run comes one frame interval after the first stream starts, like a
+// camera's first frame, so a second stream started right after the first still gets it.
+constexpr std::chrono::microseconds kFirstFrameDelay(1000000 / kTumFps);
+
+OniVersion driverVersion() {
+  OniVersion version;
+  version.major = TUM_DEVICE_VERSION_MAJOR;
+  version.minor = TUM_DEVICE_VERSION_MINOR;
+  version.maintenance = TUM_DEVICE_VERSION_PATCH;
+  version.build = 0;
+  return version;
+}
+
+}  // namespace
+
+TumDevice::TumDevice(std::shared_ptr<VirtualCamera> camera, DriverLog& log,
+                     UnplugHandler on_unplugged)
+    : camera_(std::move(camera)),
+      generation_(camera_->generation()),
+      log_(log),
+      on_unplugged_(std::move(on_unplugged)),
+      depth_modes_(DepthStream::videoModes()),
+      color_modes_(ColorStream::videoModes()) {
+  sensors_[0] = {ONI_SENSOR_DEPTH, static_cast<int>(depth_modes_.size()), depth_modes_.data()};
+  sensors_[1] = {ONI_SENSOR_COLOR, static_cast<int>(color_modes_.size()), color_modes_.data()};
+  player_ = std::thread([this] { play(); });
+}
+
+TumDevice::~TumDevice() {
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    closing_ = true;
+    state_changed_.notify_all();
+  }
+  player_.join();
+}
+
+OniStatus TumDevice::getSensorInfoList(OniSensorInfo** sensors, int* count) {
+  if (sensors == nullptr || count == nullptr) return ONI_STATUS_BAD_PARAMETER;
+  *sensors = sensors_;
+  *count = 2;
+  return ONI_STATUS_OK;
+}
+
+oni::driver::StreamBase* TumDevice::createStream(OniSensorType type) {
+  try {
+    StreamHost& host = *this;
+    std::unique_ptr<TumStream> stream;
+    if (type == ONI_SENSOR_DEPTH) {
+      stream = std::make_unique<DepthStream>(camera_->intrinsics(), host, log_);
+    } else if (type == ONI_SENSOR_COLOR) {
+      stream = std::make_unique<ColorStream>(camera_->intrinsics(), host, log_);
+    } else {
+      return nullptr;  // a TUM folder has no infrared images
+    }
+    std::lock_guard<std::mutex> lock(streams_mutex_);
+    streams_.push_back(std::move(stream));
+    return streams_.back().get();
+  } catch (const std::exception& e) {  // nothing may cross into OpenNI2's C code
+    log_.error(std::string("cannot create a stream: ") + e.what());
+    return nullptr;
+  }
+}
+
+void TumDevice::destroyStream(oni::driver::StreamBase* stream) {
+  if (stream == nullptr) return;
+  stream->stop();  // OpenNI2 stops streams first; a stream still running must not be counted
+  std::lock_guard<std::mutex> lock(streams_mutex_);
+  streams_.erase(
+      std::remove_if(streams_.begin(), streams_.end(),
+                     [stream](const std::unique_ptr<TumStream>& s) { return s.get() == stream; }),
+      streams_.end());
+}
+
+OniStatus TumDevice::setProperty(int property, const void* data, int size) {
+  if (property == ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION) {
+    OniImageRegistrationMode mode;
+    if (const OniStatus status = readProperty(data, size, mode); status != ONI_STATUS_OK)
+      return status;
+    // The recorded depth is registered already; it cannot be turned back.
+    return mode == ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR ? ONI_STATUS_OK : ONI_STATUS_NOT_SUPPORTED;
+  }
+  return isPropertySupported(property) ? ONI_STATUS_NOT_SUPPORTED : ONI_STATUS_NOT_IMPLEMENTED;
+}
+
+OniStatus TumDevice::getProperty(int property, void* data, int* size) {
+  switch (property) {
+    case ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION:
+      return writeProperty(data, size, ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR);
+    case ONI_DEVICE_PROPERTY_DRIVER_VERSION:
+      return writeProperty(data, size, driverVersion());
+    case ONI_DEVICE_PROPERTY_SERIAL_NUMBER:
+      return writeProperty(data, size, std::string(camera_->info().name));
+    default:
+      return ONI_STATUS_NOT_IMPLEMENTED;
+  }
+}
+
+OniBool TumDevice::isPropertySupported(int property) {
+  return property == ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION ||
+                 property == ONI_DEVICE_PROPERTY_DRIVER_VERSION ||
+                 property == ONI_DEVICE_PROPERTY_SERIAL_NUMBER
+             ? TRUE
+             : FALSE;
+}
+
+OniBool TumDevice::isImageRegistrationModeSupported(OniImageRegistrationMode mode) {
+  return mode == ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR ? TRUE : FALSE;
+}
+
+bool TumDevice::streamStarted() {
+  if (!camera_->plugged() || camera_->generation() != generation_) return false;
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  if (running_streams_++ == 0) ++runs_;
+  state_changed_.notify_all();
+  return true;
+}
+
+void TumDevice::streamStopped() {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  if (running_streams_ > 0) --running_streams_;
+  state_changed_.notify_all();
+}
+
+void TumDevice::play() {
+  Frame frame;  // decoded into again and again: buffers are reused
+  std::uint64_t run = 0;
+  Clock::time_point run_start;
+  double run_first_pace = 0.0;
+  bool timed = false;
+  std::unique_lock<std::mutex> lock(state_mutex_);
+  while (true) {
+    state_changed_.wait(lock, [this] { return closing_ || running_streams_ > 0; });
+    if (closing_) return;
+    if (runs_ != run) {
+      run = runs_;
+      timed = false;
+    }
+    lock.unlock();
+    const std::optional<VirtualCamera::Shot> shot = camera_->peek(generation_);
+    lock.lock();
+    if (!shot) {
+      // The end of a sequence that does not loop, or unplugged: nothing will come any more.
+      state_changed_.wait(lock, [this] { return closing_; });
+      return;
+    }
+    if (!timed) {
+      run_start = Clock::now() + kFirstFrameDelay;
+      run_first_pace = shot->pace_time;
+      timed = true;
+    }
+    const Clock::time_point due =
+        run_start + std::chrono::duration_cast<Clock::duration>(
+                        std::chrono::duration<double>(shot->pace_time - run_first_pace));
+    // Woken early by a stop, a restart or closing: the pair stays unplayed.
+    if (state_changed_.wait_until(
+            lock, due, [this, run] { return closing_ || runs_ != run || running_streams_ == 0; })) {
+      if (closing_) return;
+      continue;
+    }
+    lock.unlock();
+    std::string error;
+    if (camera_->take(*shot, frame, error)) {
+      deliver(frame, *shot);
+      if (camera_->countDelivered(generation_)) {
+        log_.info(std::string(camera_->info().uri) + ": unplugged after " +
+                  std::to_string(camera_->uri().disconnect_after) + " frames");
+        on_unplugged_(camera_);
+      }
+    } else {
+      log_.warning("skipping frame " + std::to_string(shot->frame_index) + ": " + error);
+    }
+    lock.lock();
+  }
+}
+
+void TumDevice::deliver(const Frame& frame, const VirtualCamera::Shot& shot) {
+  std::lock_guard<std::mutex> lock(streams_mutex_);
+  for (const std::unique_ptr<TumStream>& stream : streams_) stream->deliver(frame, shot);
+}
+
+}  // namespace rgbdmap::openni2_tum
