@@ -1,0 +1,362 @@
+#!/usr/bin/env bash
+# Compares rgbdmap with the original PCL method (bench/original_method) side by side, in one
+# invocation, on the same frames, and prints one table:
+#   tum    TUM fr1/rpy (100 real frames): original every 10th vs rgbdmap every 10th / every frame
+#   synth  a synthetic room with exact geometry (`rgbdmap synth`): the same three, plus F-score
+#          at 1 cm and mean distance from `rgbdmap evaluate map`
+#   long   a longer synthetic replay (~700 frames), mainly for peak memory
+# Machines are shared and noisy, so each system is also given as a ratio to the original method
+# measured in the same invocation; absolute times mean little on their own.
+#
+# Builds nothing: expects a Release build, e.g.
+#   cmake -S . -B build -DCMAKE_BUILD_TYPE=Release && cmake --build build
+# Portable bash + awk only (CI machines may not have Python).
+set -u
+export LC_ALL=C
+
+usage() {
+  cat <<'EOF'
+usage: bash bench/run.sh [options]
+  --frames N        use only the first N frames of every sequence (default: all)
+  --build DIR       build directory with rgbdmap and bench/original_method (default: build)
+  --out FILE        also write the table (with the run's context) to FILE, e.g. bench/results.md
+  --work DIR        where sequences, maps and JSON go (default: a new folder under $TMPDIR)
+  --synth-frames N  frames of the synthetic sequence (default: 300)
+  --long-frames N   frames of the long synthetic replay (default: 700; 0 skips it)
+  --every N         keyframe interval of the original method and of "rgbdmap every Nth" (default 10)
+  --micro           also run the Google Benchmark microbenchmarks and append their output
+  --keep            keep the work folder (default: kept only when --work is given)
+EOF
+}
+
+frames_limit=""
+build_dir="build"
+out_file=""
+work_dir=""
+synth_frames=300
+long_frames=700
+every_n=10
+run_micro=0
+keep=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --frames) frames_limit="$2"; shift 2 ;;
+    --build) build_dir="$2"; shift 2 ;;
+    --out) out_file="$2"; shift 2 ;;
+    --work) work_dir="$2"; keep=1; shift 2 ;;
+    --synth-frames) synth_frames="$2"; shift 2 ;;
+    --long-frames) long_frames="$2"; shift 2 ;;
+    --every) every_n="$2"; shift 2 ;;
+    --micro) run_micro=1; shift ;;
+    --keep) keep=1; shift ;;
+    -h|--help) usage; exit 0 ;;
+    *) echo "run.sh: unknown option $1" >&2; usage >&2; exit 2 ;;
+  esac
+done
+for n in "$synth_frames" "$long_frames" "$every_n" ${frames_limit:+"$frames_limit"}; do
+  case "$n" in ''|*[!0-9]*) echo "run.sh: '$n' is not a whole number" >&2; exit 2 ;; esac
+done
+
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root" || exit 1
+case "$build_dir" in /*) ;; *) build_dir="$root/$build_dir" ;; esac
+case "$out_file" in ''|/*) ;; *) out_file="$root/$out_file" ;; esac
+rgbdmap="$build_dir/rgbdmap"
+original="$build_dir/bench/original_method"
+micro="$build_dir/bench/micro_benchmarks"
+for exe in "$rgbdmap" "$original"; do
+  if [ ! -x "$exe" ]; then
+    echo "run.sh: $exe not found; build first:" >&2
+    echo "  cmake -S . -B ${build_dir#"$root"/} -DCMAKE_BUILD_TYPE=Release && cmake --build ${build_dir#"$root"/}" >&2
+    exit 1
+  fi
+done
+data_dir="${RGBDMAP_DATA_DIR:-$root/../shared/data}"
+tum_source="$data_dir/tum/rgbd_dataset_freiburg1_rpy_head100"
+if [ ! -f "$tum_source/rgb.txt" ]; then
+  echo "run.sh: $tum_source: no TUM sequence there (set RGBDMAP_DATA_DIR)" >&2
+  exit 1
+fi
+
+if [ -z "$work_dir" ]; then
+  work_dir=$(mktemp -d "${TMPDIR:-/tmp}/rgbdmap-bench.XXXXXX") || exit 1
+fi
+mkdir -p "$work_dir" || exit 1
+work_dir=$(cd "$work_dir" && pwd)
+rows="$work_dir/rows.tsv"
+notes="$work_dir/notes.txt"
+: >"$rows"
+: >"$notes"
+failures=0
+
+note() { echo "$*" >>"$notes"; echo "run.sh: $*" >&2; }
+
+# Seconds since the epoch with sub-second resolution (bash 5's EPOCHREALTIME, else GNU date).
+now() {
+  if [ -n "${EPOCHREALTIME:-}" ]; then echo "$EPOCHREALTIME"; else date +%s.%N; fi
+}
+elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", b - a }'; }
+
+# json_number FILE KEY [OBJECT]: the number after "KEY": (inside "OBJECT" when given), or
+# nothing. Works on any formatting of the file (it is read as one string).
+json_number() {
+  [ -f "$1" ] || return 0
+  awk -v key="$2" -v obj="${3:-}" 'BEGIN { RS = "\001" }
+    {
+      s = $0
+      if (obj != "") { i = index(s, "\"" obj "\""); if (!i) exit; s = substr(s, i + length(obj) + 2) }
+      while ((i = index(s, "\"" key "\"")) > 0) {
+        s = substr(s, i + length(key) + 2)
+        if (match(s, /^[ \t\r\n]*:[ \t\r\n]*-?[0-9][0-9.eE+-]*/)) {
+          v = substr(s, RSTART, RLENGTH); sub(/^[^:]*:[ \t\r\n]*/, "", v); print v; exit
+        }
+      }
+    }' "$1"
+}
+
+# A copy of a TUM folder's lists cut to the first N colour frames (and the depth images up to
+# just after them); images and ground truth are linked, not copied. The folder keeps its name,
+# so both programs pick the same camera preset from it.
+cut_tum() {  # SOURCE DEST N
+  local src="$1" dst="$2" n="$3"
+  mkdir -p "$dst" || return 1
+  local item
+  for item in rgb depth groundtruth.txt accelerometer.txt; do
+    [ -e "$src/$item" ] && ln -sfn "$src/$item" "$dst/$item"
+  done
+  for item in "$src"/*; do  # anything else the sequence carries (e.g. a camera file)
+    case "${item##*/}" in rgb|depth|rgb.txt|depth.txt|groundtruth.txt|accelerometer.txt) ;;
+      *) ln -sfn "$item" "$dst/${item##*/}" ;; esac
+  done
+  awk -v n="$n" '/^#/ { print; next } { if (++count > n) exit; print }' "$src/rgb.txt" >"$dst/rgb.txt"
+  local last
+  last=$(awk '!/^#/ && NF { t = $1 } END { print t }' "$dst/rgb.txt")
+  awk -v last="$last" '/^#/ { print; next } NF && $1 + 0 <= last + 0.02 { print }' \
+    "$src/depth.txt" >"$dst/depth.txt"
+}
+
+# add_row SCENARIO SYSTEM FRAMES FUSED WALL FPS KF_P50 KF_P95 RSS POINTS FSCORE MEAN_MM BASELINE
+add_row() {
+  local IFS=$'\t'
+  echo "$*" >>"$rows"
+}
+dash() { if [ -n "$1" ]; then echo "$1"; else echo "-"; fi; }
+
+# F-score at 1 cm and mean distance (mm) of MAP against the synthetic scene SCENE, or "- -".
+evaluate_map() {  # MAP SCENE JSON
+  local map="$1" scene="$2" json="$3"
+  if [ "$have_evaluate" != 1 ] || [ ! -f "$map" ]; then echo "- -"; return; fi
+  if ! "$rgbdmap" evaluate map "$map" --scene "$scene" --json "$json" >"$json.log" 2>&1; then
+    note "evaluate failed on $map (see $json.log)"
+    echo "- -"
+    return
+  fi
+  local f="" mean="" key
+  for key in f_score fscore f1 f_score_1cm; do
+    f=$(json_number "$json" "$key"); [ -n "$f" ] && break
+  done
+  for key in mean_distance_mm mean_error_mm mean_mm; do
+    mean=$(json_number "$json" "$key"); [ -n "$mean" ] && break
+  done
+  if [ -z "$mean" ]; then
+    for key in mean_distance_m mean_distance mean_error_m mean_error; do
+      mean=$(json_number "$json" "$key")
+      if [ -n "$mean" ]; then mean=$(awk -v m="$mean" 'BEGIN { printf "%.2f", m * 1000 }'); break; fi
+    done
+  fi
+  [ -z "$f" ] && note "evaluate: no F-score in $json"
+  echo "$(dash "$f") $(dash "$mean")"
+}
+
+run_original() {  # SCENARIO SEQUENCE EXACT_SCENE(or empty)
+  local scenario="$1" seq="$2" scene="$3" base="$work_dir/$1-original"
+  echo "== $scenario: original method, every ${every_n}th frame" >&2
+  local t0 t1
+  t0=$(now)
+  if ! "$original" "$seq" --every "$every_n" --out "$base.pcd" --json "$base.json" -q \
+      >"$base.log" 2>&1; then
+    note "$scenario: original_method failed (see $base.log)"
+    failures=$((failures + 1))
+    add_row "$scenario" "original every $every_n" - - - - - - - - - - 1
+    return
+  fi
+  t1=$(now)
+  local overflows
+  overflows=$(json_number "$base.json" voxel_grid_overflows)
+  if [ "${overflows:-0}" != 0 ]; then
+    note "$scenario: pcl::VoxelGrid returned its input unfiltered $overflows time(s) (extent/leaf overflows 32-bit indices; the original's bug, kept)"
+  fi
+  local quality
+  quality=$(if [ -n "$scene" ]; then evaluate_map "$base.pcd" "$scene" "$base-eval.json"; else echo "- -"; fi)
+  add_row "$scenario" "original every $every_n" \
+    "$(json_number "$base.json" frames)" "$(json_number "$base.json" keyframes)" \
+    "$(elapsed "$t0" "$t1")" "$(json_number "$base.json" frames_per_second)" \
+    "$(json_number "$base.json" p50_ms keyframe_ms)" "$(json_number "$base.json" p95_ms keyframe_ms)" \
+    "$(json_number "$base.json" peak_rss_mb)" "$(json_number "$base.json" map_points)" \
+    ${quality} 1
+}
+
+run_rgbdmap() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
+  local scenario="$1" seq="$2" n="$3" scene="$4" base="$work_dir/$1-rgbdmap-every$3"
+  local label="rgbdmap every $n"
+  [ "$n" = 1 ] && label="rgbdmap every frame"
+  echo "== $scenario: $label" >&2
+  local t0 t1
+  t0=$(now)
+  if ! "$rgbdmap" --source "tum:$seq" --out "$base.pcd" --rate max -q --no-render \
+      --stats "$base.json" --set "keyframe.every_n=$n" >"$base.log" 2>&1; then
+    note "$scenario: rgbdmap ($label) failed (see $base.log)"
+    failures=$((failures + 1))
+    add_row "$scenario" "$label" - - - - - - - - - - 0
+    return
+  fi
+  t1=$(now)
+  local quality
+  quality=$(if [ -n "$scene" ]; then evaluate_map "$base.pcd" "$scene" "$base-eval.json"; else echo "- -"; fi)
+  # rgbdmap's latency histograms give p50/p90/p99; p95 only once its JSON carries p95_ms.
+  add_row "$scenario" "$label" \
+    "$(json_number "$base.json" frames_processed)" "$(json_number "$base.json" keyframes)" \
+    "$(elapsed "$t0" "$t1")" "$(json_number "$base.json" frames_per_second)" \
+    "$(json_number "$base.json" p50_ms integrate)" "$(dash "$(json_number "$base.json" p95_ms integrate)")" \
+    "$(json_number "$base.json" peak_rss_mb)" "$(json_number "$base.json" map_points)" \
+    ${quality} 0
+}
+
+run_scenario() {  # SCENARIO SEQUENCE EXACT_SCENE(or empty)
+  run_original "$1" "$2" "$3"
+  run_rgbdmap "$1" "$2" "$every_n" "$3"
+  run_rgbdmap "$1" "$2" 1 "$3"
+}
+
+# --- (a) TUM fr1/rpy, real frames -----------------------------------------------------------
+tum_seq="$tum_source"
+if [ -n "$frames_limit" ]; then
+  tum_seq="$work_dir/tum/${tum_source##*/}"
+  cut_tum "$tum_source" "$tum_seq" "$frames_limit" || { echo "run.sh: cannot cut $tum_source" >&2; exit 1; }
+fi
+run_scenario tum "$tum_seq" ""
+
+# --- (b), (c) synthetic sequences with exact geometry -----------------------------------------
+have_synth=0
+have_evaluate=0
+# has_subcommand NAME [PARENT]: whether `rgbdmap [PARENT] --help` lists NAME as a subcommand
+# (an unknown subcommand is not an error to CLI11: it would print the main help and succeed).
+has_subcommand() {
+  "$rgbdmap" ${2:+"$2"} --help 2>/dev/null |
+    awk -v name="$1" '/^Subcommands:/ { listed = 1; next } listed && $1 == name { found = 1 } END { exit !found }'
+}
+has_subcommand synth && have_synth=1
+has_subcommand evaluate && "$rgbdmap" evaluate --help 2>/dev/null | grep -q "map" && have_evaluate=1
+[ "$have_synth" = 1 ] || note "synth, long: skipped: this rgbdmap has no 'synth' subcommand"
+[ "$have_synth" = 1 ] && [ "$have_evaluate" = 0 ] &&
+  note "synth: no F-score: this rgbdmap has no 'evaluate map' subcommand"
+
+make_synth() {  # DEST FRAMES
+  echo "== generating a synthetic sequence of $2 frames" >&2
+  local t0 t1
+  t0=$(now)
+  if ! "$rgbdmap" synth --out "$1" --frames "$2" >"$1.log" 2>&1; then
+    note "rgbdmap synth --out $1 --frames $2 failed (see $1.log)"
+    return 1
+  fi
+  t1=$(now)
+  echo "synthetic sequence of $2 frames generated in $(elapsed "$t0" "$t1") s: $1" >>"$notes"
+}
+
+if [ "$have_synth" = 1 ]; then
+  n="$synth_frames"
+  [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
+  if make_synth "$work_dir/synth" "$n"; then run_scenario synth "$work_dir/synth" "$work_dir/synth"; fi
+  if [ "$long_frames" -gt 0 ]; then
+    n="$long_frames"
+    [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
+    if make_synth "$work_dir/long" "$n"; then run_scenario long "$work_dir/long" "$work_dir/long"; fi
+  fi
+fi
+
+# --- the table --------------------------------------------------------------------------------
+table="$work_dir/table.txt"
+awk -F '\t' '
+  function num(x) { return x ~ /^-?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?$/ }
+  function fmt(x, digits) { return num(x) ? sprintf("%." digits "f", x) : "-" }
+  function ratio(x, base, inverse) {
+    if (!num(x) || !num(base) || x + 0 == 0 || base + 0 == 0) return "-"
+    return sprintf("%.2f", inverse ? base / x : x / base)
+  }
+  { for (i = 1; i <= NF; ++i) field[NR, i] = $i; if ($13 == 1) base_row[$1] = NR; n = NR }
+  END {
+    header = "scenario|system|frames|fused|wall s|frames/s|kf ms p50|kf ms p95|peak RSS MB|map points|F@1cm|mean mm|fps x|kf speed-up|RSS x"
+    cols = split(header, h, "|")
+    for (c = 1; c <= cols; ++c) { cell[0, c] = h[c]; width[c] = length(h[c]) }
+    for (r = 1; r <= n; ++r) {
+      b = base_row[field[r, 1]]
+      cell[r, 1] = field[r, 1]; cell[r, 2] = field[r, 2]
+      cell[r, 3] = fmt(field[r, 3], 0); cell[r, 4] = fmt(field[r, 4], 0)
+      cell[r, 5] = fmt(field[r, 5], 2); cell[r, 6] = fmt(field[r, 6], 2)
+      cell[r, 7] = fmt(field[r, 7], 1); cell[r, 8] = fmt(field[r, 8], 1)
+      cell[r, 9] = fmt(field[r, 9], 0); cell[r, 10] = fmt(field[r, 10], 0)
+      cell[r, 11] = fmt(field[r, 11], 3); cell[r, 12] = fmt(field[r, 12], 2)
+      cell[r, 13] = b ? ratio(field[r, 6], field[b, 6], 0) : "-"
+      cell[r, 14] = b ? ratio(field[r, 7], field[b, 7], 1) : "-"
+      cell[r, 15] = b ? ratio(field[r, 9], field[b, 9], 0) : "-"
+      for (c = 1; c <= cols; ++c) if (length(cell[r, c]) > width[c]) width[c] = length(cell[r, c])
+    }
+    for (r = 0; r <= n; ++r) {
+      line = ""
+      for (c = 1; c <= cols; ++c) {
+        f = (c <= 2) ? "%-" width[c] "s" : "%" width[c] "s"
+        line = line (c > 1 ? "  " : "") sprintf(f, cell[r, c])
+      }
+      print line
+      if (r == 0) { rule = line; gsub(/./, "-", rule); print rule }
+    }
+  }' "$rows" >"$table"
+
+legend="frames: frames read; fused: keyframes integrated; wall s: whole process, measured by this
+script; frames/s and kf ms (per-keyframe integration time) as each program reports them;
+peak RSS: VmHWM. F@1cm / mean mm: map against the exact synthetic geometry (rgbdmap evaluate).
+Ratios are against the original method in the same scenario of this invocation: fps x = frames/s
+ratio, kf speed-up = original kf ms p50 / this kf ms p50, RSS x = peak RSS ratio.
+rgbdmap reports latency percentiles p50/p90/p99 only, so its p95 shows '-' until its --stats
+JSON has p95_ms."
+
+cat "$table"
+echo
+echo "$legend"
+if [ -s "$notes" ]; then echo; cat "$notes"; fi
+
+micro_out=""
+if [ "$run_micro" = 1 ]; then
+  if [ -x "$micro" ]; then
+    echo "== microbenchmarks" >&2
+    micro_out="$work_dir/micro.txt"
+    "$micro" --benchmark_min_time=0.5 >"$micro_out" 2>&1 || { note "micro_benchmarks failed"; failures=$((failures + 1)); }
+    echo
+    cat "$micro_out"
+  else
+    note "$micro not built; no microbenchmarks"
+  fi
+fi
+
+if [ -n "$out_file" ]; then
+  {
+    echo "# rgbdmap vs the original method"
+    echo
+    echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
+    echo "- host: $(uname -n), $(getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?') cores, $(uname -sr)"
+    echo "- commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet HEAD 2>/dev/null || echo ' (with uncommitted changes)')"
+    echo "- command: bash bench/run.sh ${frames_limit:+--frames $frames_limit }--build ${build_dir#"$root"/}$([ "$run_micro" = 1 ] && echo " --micro")"
+    echo
+    echo '```'
+    cat "$table"
+    echo '```'
+    echo
+    echo "$legend"
+    if [ -s "$notes" ]; then echo; echo "Notes:"; echo; sed 's/^/- /' "$notes"; fi
+    if [ -n "$micro_out" ]; then echo; echo "## Microbenchmarks"; echo; echo '```'; cat "$micro_out"; echo '```'; fi
+  } >"$out_file"
+  echo "table written to $out_file" >&2
+fi
+
+if [ "$keep" = 1 ]; then echo "maps, logs and JSON kept in $work_dir" >&2; else rm -rf "$work_dir"; fi
+[ "$failures" = 0 ]
