@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 #include <pcl/filters/statistical_outlier_removal.h>
 
+#include <algorithm>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -23,7 +24,7 @@ namespace {
 const std::string kSequence =
     std::string(RGBDMAP_DATA_DIR) + "/tum/rgbd_dataset_freiburg1_rpy_head100";
 constexpr std::size_t kFrameIndex = 50;  // mid-sequence: a typical view of the scene
-constexpr int kSceneEveryN = 10;        // the scene map: every 10th frame, as the default run
+constexpr int kSceneEveryN = 10;         // the scene map: every 10th frame, as the default run
 
 // Everything the benchmarks share, loaded once: the sequence, its fr1 configuration, one
 // decoded frame, the frame's points as the integrator would fuse them, and a map of the scene.
@@ -31,8 +32,8 @@ struct Fixture {
   rgbdmap::Config config;
   std::unique_ptr<rgbdmap::TumSequence> sequence;
   rgbdmap::Frame frame;
-  cv::Mat filtered_depth;        // after the depth filter and smoothing
-  rgbdmap::PointBatch points;    // filtered_depth projected, as fused
+  cv::Mat filtered_depth;      // after the depth filter and smoothing
+  rgbdmap::PointBatch points;  // filtered_depth projected, as fused
   std::unique_ptr<rgbdmap::VoxelMap> scene;
 
   Fixture() {
