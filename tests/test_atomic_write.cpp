@@ -88,9 +88,14 @@ TEST(AtomicWrite, EmptyMapIsAValidPcd) {
   const std::string dir = test::freshDir();
   std::string error;
   ASSERT_TRUE(writePcdAtomically(MapCloud(), dir + "/empty.pcd", error)) << error;
-  MapCloud loaded;
-  EXPECT_EQ(pcl::io::loadPCDFile(dir + "/empty.pcd", loaded), 0);
-  EXPECT_TRUE(loaded.empty());
+  // Read as a generic cloud: PCL's typed loader trips UBSan on zero points (&data[0] of an
+  // empty vector in its header-only conversion), which is PCL's problem, not the file's.
+  pcl::PCLPointCloud2 loaded;
+  ASSERT_EQ(pcl::io::loadPCDFile(dir + "/empty.pcd", loaded), 0);
+  EXPECT_EQ(loaded.width * loaded.height, 0u);
+  std::string fields;
+  for (const auto& f : loaded.fields) fields += f.name + " ";
+  EXPECT_EQ(fields, "x y z rgb ");
 }
 
 }  // namespace
