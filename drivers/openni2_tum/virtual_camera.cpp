@@ -24,7 +24,7 @@ void copyText(char (&target)[ONI_MAX_STR], const std::string& text) {
 std::string absoluteFolder(const std::string& folder) {
   std::error_code ignored;
   const std::filesystem::path absolute = std::filesystem::absolute(folder, ignored);
-  return absolute.empty() ? folder : absolute.lexically_normal().string();
+  return absolute.empty() ? folder : absolute.string();
 }
 
 }  // namespace
