@@ -425,7 +425,7 @@ TEST_F(OpenNI2TumDriver, CroppingAndMirroringShapeTheDeliveredFrames) {
 TEST_F(OpenNI2TumDriver, DisconnectAfterStopsAfterExactlyNFramesAndReplugContinues) {
   TumSequence sequence(test::tumDir(kXyz));
   const std::string uri =
-      "tum:" + test::tumDir(kXyz) + "?disconnect_after=5&reconnect_after_ms=2500";
+      "tum:" + test::tumDir(kXyz) + "?disconnect_after=5&reconnect_after_ms=4000";
   PlugEvents events(uri);
   std::vector<ReadFrame> first;
   {
@@ -434,7 +434,7 @@ TEST_F(OpenNI2TumDriver, DisconnectAfterStopsAfterExactlyNFramesAndReplugContinu
     openni::VideoStream depth;
     ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
     ASSERT_EQ(depth.start(), openni::STATUS_OK);
-    first = readFrames({&depth}, 10, 800);  // asks for more than 5: only 5 may come
+    first = readFrames({&depth}, 10, 1200);  // asks for more than 5: only 5 may come
     ASSERT_TRUE(events.waitDisconnected(1, std::chrono::milliseconds(0)))
         << "no disconnection reported after the frames stopped";
     EXPECT_FALSE(contains(enumeratedUris(), uri));
@@ -452,7 +452,7 @@ TEST_F(OpenNI2TumDriver, DisconnectAfterStopsAfterExactlyNFramesAndReplugContinu
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(depth.start(), openni::STATUS_OK);
-  const std::vector<ReadFrame> second = readFrames({&depth}, 10, 1000);
+  const std::vector<ReadFrame> second = readFrames({&depth}, 10, 1200);
   depth.stop();
   // The next five pairs, then unplugged again.
   ASSERT_EQ(second.size(), 5u);
