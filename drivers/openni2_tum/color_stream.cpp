@@ -11,6 +11,7 @@ std::vector<OniVideoMode> ColorStream::videoModes() {
   return {{ONI_PIXEL_FORMAT_RGB888, kTumWidth, kTumHeight, kTumFps}};
 }
 
+TUM_DEVICE_WRITES_OPENNI2_FRAMES
 void ColorStream::writePixels(const Frame& frame, const cv::Rect& source,
                               const OniVideoMode& /*mode*/, cv::Mat& target) {
   // TumSequence decodes to OpenCV's BGR; swapping back restores the PNG's RGB bytes. `target`

@@ -22,6 +22,7 @@ std::vector<OniVideoMode> DepthStream::videoModes() {
           {ONI_PIXEL_FORMAT_DEPTH_1_MM, kTumWidth, kTumHeight, kTumFps}};
 }
 
+TUM_DEVICE_WRITES_OPENNI2_FRAMES
 void DepthStream::writePixels(const Frame& frame, const cv::Rect& source, const OniVideoMode& mode,
                               cv::Mat& target) {
   // Frames carry metres as float (TumSequence's 16-bit value / 5000): value * 10000 is within

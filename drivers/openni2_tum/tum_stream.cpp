@@ -30,23 +30,20 @@ TumStream::TumStream(OniSensorType type, std::vector<OniVideoMode> modes,
       log_(log),
       mode_(modes_.front()) {}
 
+// The host is told under the stream's mutex so that its count of running streams always
+// matches; the device's playback thread never takes a stream's mutex while holding its own.
 OniStatus TumStream::start() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (started_) return ONI_STATUS_OK;
-  }
-  if (!host_.streamStarted()) return ONI_STATUS_ERROR;
   std::lock_guard<std::mutex> lock(mutex_);
+  if (started_) return ONI_STATUS_OK;
+  if (!host_.streamStarted()) return ONI_STATUS_ERROR;
   started_ = true;
   return ONI_STATUS_OK;
 }
 
 void TumStream::stop() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!started_) return;
-    started_ = false;
-  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!started_) return;
+  started_ = false;
   host_.streamStopped();
 }
 
@@ -151,6 +148,33 @@ OniStatus TumStream::getOwnProperty(int /*property*/, void* /*data*/, int* /*siz
 
 bool TumStream::hasOwnProperty(int /*property*/) const { return false; }
 
+TUM_DEVICE_WRITES_OPENNI2_FRAMES
+void TumStream::fillFrame(OniFrame* out, const Frame& frame, const VirtualCamera::Shot& shot,
+                          const OniVideoMode& mode, const cv::Rect& rect, bool cropping,
+                          bool mirroring) {
+  const int bytes_per_pixel = bytesPerPixel(mode.pixelFormat);
+  out->sensorType = type_;
+  out->videoMode = mode;
+  out->width = rect.width;
+  out->height = rect.height;
+  out->stride = rect.width * bytes_per_pixel;
+  out->dataSize = out->stride * rect.height;
+  out->croppingEnabled = cropping ? TRUE : FALSE;
+  out->cropOriginX = rect.x;
+  out->cropOriginY = rect.y;
+  out->timestamp = timestampOf(shot);
+  out->frameIndex = shot.frame_index;
+
+  // A crop of the mirrored image is the mirror of the same-sized crop at the opposite side.
+  const cv::Rect source =
+      mirroring ? cv::Rect(mode.resolutionX - rect.x - rect.width, rect.y, rect.width, rect.height)
+                : rect;
+  cv::Mat target(rect.height, rect.width, bytes_per_pixel == 2 ? CV_16UC1 : CV_8UC3, out->data,
+                 static_cast<std::size_t>(out->stride));
+  writePixels(frame, source, mode, target);
+  if (mirroring) cv::flip(target, target, 1);  // in place: cv::flip swaps column pairs
+}
+
 void TumStream::deliver(const Frame& frame, const VirtualCamera::Shot& shot) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!started_) return;
@@ -167,28 +191,7 @@ void TumStream::deliver(const Frame& frame, const VirtualCamera::Shot& shot) {
                  " dropped");
     return;
   }
-  const cv::Rect rect = deliveredRect();
-  const int bytes_per_pixel = bytesPerPixel(mode_.pixelFormat);
-  out->sensorType = type_;
-  out->videoMode = mode_;
-  out->width = rect.width;
-  out->height = rect.height;
-  out->stride = rect.width * bytes_per_pixel;
-  out->dataSize = out->stride * rect.height;
-  out->croppingEnabled = cropping_.enabled ? TRUE : FALSE;
-  out->cropOriginX = rect.x;
-  out->cropOriginY = rect.y;
-  out->timestamp = timestampOf(shot);
-  out->frameIndex = shot.frame_index;
-
-  // A crop of the mirrored image is the mirror of the same-sized crop at the opposite side.
-  const cv::Rect source = mirroring_ ? cv::Rect(mode_.resolutionX - rect.x - rect.width, rect.y,
-                                                rect.width, rect.height)
-                                     : rect;
-  cv::Mat target(rect.height, rect.width, bytes_per_pixel == 2 ? CV_16UC1 : CV_8UC3, out->data,
-                 static_cast<std::size_t>(out->stride));
-  writePixels(frame, source, mode_, target);
-  if (mirroring_) cv::flip(target, target, 1);  // in place: cv::flip swaps column pairs
+  fillFrame(out, frame, shot, mode_, deliveredRect(), cropping_.enabled != FALSE, mirroring_);
   raiseNewFrame(out);
   getServices().releaseFrame(out);
 }
