@@ -353,7 +353,12 @@ if [ -n "$out_file" ]; then
     echo
     echo "$legend"
     if [ -s "$notes" ]; then echo; echo "Notes:"; echo; sed 's/^/- /' "$notes"; fi
-    if [ -n "$micro_out" ]; then echo; echo "## Microbenchmarks"; echo; echo '```'; cat "$micro_out"; echo '```'; fi
+    if [ -n "$micro_out" ]; then
+      echo; echo "## Microbenchmarks"; echo
+      echo "One fr1/rpy frame (640x480). Google Benchmark's \"Library was built as DEBUG\" warning is about"
+      echo "Debian's libbenchmark package itself (built without NDEBUG); the code measured is Release."
+      echo; echo '```'; cat "$micro_out"; echo '```'
+    fi
   } >"$out_file"
   echo "table written to $out_file" >&2
 fi
