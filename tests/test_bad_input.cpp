@@ -138,6 +138,12 @@ TEST_F(BadImage, DepthOfTheWrongSize) {
   expectOneSkipped(seq_ + "/depth.txt:8: " + path + ": depth is 320x240 but colour");
 }
 
+TEST_F(BadImage, NotAnImageAtAll) {
+  // Must not silently reuse the previous frame's colour.
+  std::ofstream(seq_ + "/rgb/1305031102.311267.png") << "this is not a picture";
+  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ + "/rgb/1305031102.311267.png: not a PNG image");
+}
+
 TEST_F(BadImage, ColourWhereDepthShouldBe) {
   fs::copy_file(seq_ + "/rgb/1305031102.311267.png", seq_ + "/depth/1305031102.295279.png",
                 fs::copy_options::overwrite_existing);

@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
@@ -110,6 +111,13 @@ bool TumSequence::readImage(const std::string& path, int flags, cv::Mat& out,
   file_buffer_.resize(static_cast<std::size_t>(std::max<std::streamsize>(size, 0)));
   if (size <= 0 || !in.read(reinterpret_cast<char*>(file_buffer_.data()), size)) {
     error = path + ": empty or unreadable image";
+    return false;
+  }
+  // TUM images are PNG. Checking the signature also matters because imdecode leaves `out`
+  // untouched (holding the previous frame) when no decoder recognises the data.
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (file_buffer_.size() < 8 || !std::equal(kPngSignature, kPngSignature + 8, file_buffer_.begin())) {
+    error = path + ": not a PNG image";
     return false;
   }
   try {
