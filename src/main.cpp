@@ -165,6 +165,8 @@ int main(int argc, char** argv) {
   rgbdmap::Command selected;
   rgbdmap::addRenderCommand(app, selected);
   rgbdmap::addAssociateCommand(app, selected);
+  rgbdmap::addDevicesCommand(app, selected);
+  rgbdmap::addRecordCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

@@ -11,5 +11,7 @@ using Command = std::function<int()>;
 
 void addRenderCommand(CLI::App& app, Command& selected);    // tools/render.cpp
 void addAssociateCommand(CLI::App& app, Command& selected); // tools/associate.cpp
+void addDevicesCommand(CLI::App& app, Command& selected);   // tools/devices.cpp
+void addRecordCommand(CLI::App& app, Command& selected);    // tools/record.cpp
 
 }  // namespace rgbdmap

@@ -16,6 +16,9 @@ struct Config {
 
   CameraIntrinsics camera;
   double depth_scale = 5000.0;  // camera.depth_scale: depth units per metre (TUM 5000)
+  // camera.intrinsics: "preset" (the camera.fx/fy/cx/cy above) or "device" (from the field of
+  // view an OpenNI2 device reports; other sources ignore it).
+  std::string camera_intrinsics = "preset";
 
   double rate = 1.0;  // replay.rate: 1 = recorded speed, 0 = as fast as possible (lossless)
   int queue_capacity = 8;  // queue.capacity

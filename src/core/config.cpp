@@ -124,6 +124,9 @@ std::vector<Config::Key> Config::keys() {
       number("camera.k3", &camera.k3, -100, 100, "radial distortion k3"),
       number("camera.depth_scale", &depth_scale, 1e-3, kBig,
              "depth units per metre (TUM PNG 5000, OpenNI2 1000)"),
+      // OpenNI2 sources: where the intrinsics come from.
+      choice("camera.intrinsics", &camera_intrinsics, {"preset", "device"},
+             "preset: camera.fx/fy/cx/cy; device: from the OpenNI2 device's field of view"),
       number("replay.rate", &rate, 0, 1000,
              "replay speed: 1 = as recorded (late frames dropped), 0 = as fast as possible, lossless"),
       integer("queue.capacity", &queue_capacity, 1, 1024, "frames queued between capture and mapping"),

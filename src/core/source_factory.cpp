@@ -1,6 +1,7 @@
 #include "rgbdmap/source_factory.hpp"
 
 #include "rgbdmap/error.hpp"
+#include "rgbdmap/openni2_source.hpp"
 #include "rgbdmap/tum_source.hpp"
 
 namespace rgbdmap {
@@ -21,6 +22,8 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const Config& c
     options.max_pose_gap = config.pose_max_gap;
     return std::make_unique<TumSource>(spec.substr(4), options, config.camera, config.rate);
   }
+  if (spec == "openni2") return openOpenNI2Source("", config);
+  if (spec.rfind("openni2:", 0) == 0) return openOpenNI2Source(spec.substr(8), config);
   throw InputError("--source " + spec + ": unknown source (expected tum:DIR, openni2, " +
                    "openni2:URI or openni2:FILE.oni)");
 }

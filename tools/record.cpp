@@ -1,0 +1,236 @@
+// `rgbdmap record`: saves what a source delivers (a live OpenNI2 camera, an .oni recording or a
+// TUM folder) as a TUM RGB-D folder, so captures can be replayed with --source tum:DIR and shared.
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "rgbdmap/commands.hpp"
+#include "rgbdmap/config.hpp"
+#include "rgbdmap/error.hpp"
+#include "rgbdmap/source_factory.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kTumDepthUnitsPerMetre = 5000.0;  // TUM's 16-bit depth PNGs
+
+struct RecordOptions {
+  std::string source;
+  std::string out;
+  std::uint64_t frames = 0;  // 0: until the source ends or Ctrl-C
+  std::string config_file;
+  std::vector<std::string> sets;
+};
+
+// SIGINT/SIGTERM ask the recording to stop after the frame in hand. Signals are taken with
+// sigtimedwait on a thread of their own (main blocks them in every thread), never in a handler.
+class StopOnSignal {
+ public:
+  StopOnSignal() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGINT);
+    sigaddset(&set_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set_, nullptr);
+    thread_ = std::thread([this] {
+      const timespec timeout{0, 100 * 1000 * 1000};
+      while (!done_.load()) {
+        const int sig = sigtimedwait(&set_, nullptr, &timeout);
+        if (sig == SIGINT || sig == SIGTERM) {
+          if (stop_.exchange(true) && sig == SIGINT) {
+            std::fputs("\nsecond interrupt: quitting now (the lists hold every saved frame)\n",
+                       stderr);
+            std::_Exit(130);
+          }
+          spdlog::info("{}: stopping after this frame", sig == SIGINT ? "SIGINT" : "SIGTERM");
+        }
+      }
+    });
+  }
+  ~StopOnSignal() {
+    done_.store(true);
+    thread_.join();
+  }
+  bool stopRequested() const { return stop_.load(); }
+
+ private:
+  sigset_t set_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+// One TUM list (rgb.txt or depth.txt), each line flushed as soon as its image is complete, so an
+// interrupted recording still has lists that match its images.
+class TumList {
+ public:
+  TumList(const std::string& path, const std::string& what, const std::string& origin)
+      : path_(path), out_(path) {
+    out_ << "# " << what << "\n# file: '" << origin << "'\n# timestamp filename\n";
+    check();
+  }
+  void add(const std::string& stamp, const std::string& file) {
+    out_ << stamp << ' ' << file << '\n';
+    out_.flush();
+    check();
+  }
+
+ private:
+  void check() {
+    if (!out_) throw InputError(path_ + ": cannot write (" + std::strerror(errno) + ")");
+  }
+  std::string path_;
+  std::ofstream out_;
+};
+
+// Writes an image beside its final name and renames it, so no half-written PNG is ever listed.
+void writePng(const cv::Mat& image, const fs::path& path) {
+  const fs::path partial = fs::path(path).replace_extension(".partial.png");
+  const std::vector<int> params{cv::IMWRITE_PNG_COMPRESSION, 1};  // lossless; fast enough for live
+  bool ok = false;
+  try {
+    ok = cv::imwrite(partial.string(), image, params);
+  } catch (const cv::Exception&) {
+    ok = false;
+  }
+  std::error_code ec;
+  if (ok) fs::rename(partial, path, ec);
+  if (!ok || ec) {
+    fs::remove(partial, ec);
+    throw InputError(path.string() + ": cannot write the image (disk full or read-only?)");
+  }
+}
+
+// Metres to TUM depth units (5000 per metre, 0 = missing). Returns how many measurements were
+// beyond the 16-bit range (13.1 m) and had to be dropped.
+std::uint64_t toTumDepth(const cv::Mat& metres, cv::Mat& units) {
+  units.create(metres.rows, metres.cols, CV_16UC1);
+  std::uint64_t too_far = 0;
+  for (int y = 0; y < metres.rows; ++y) {
+    const float* in = metres.ptr<float>(y);
+    std::uint16_t* out = units.ptr<std::uint16_t>(y);
+    for (int x = 0; x < metres.cols; ++x) {
+      const double value = std::round(static_cast<double>(in[x]) * kTumDepthUnitsPerMetre);
+      if (!(value > 0)) {
+        out[x] = 0;  // missing, negative or NaN
+      } else if (value > 65535.0) {
+        out[x] = 0;
+        ++too_far;
+      } else {
+        out[x] = static_cast<std::uint16_t>(value);
+      }
+    }
+  }
+  return too_far;
+}
+
+int record(const RecordOptions& o) {
+  StopOnSignal signals;  // before the source starts any thread, so they inherit the mask
+  Config config;
+  config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
+  config.set("replay.rate", "0", "record");  // recordings and folders: every frame, lossless
+  for (const std::string& s : o.sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
+    config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
+  }
+
+  const fs::path out(o.out);
+  std::error_code ec;
+  if (fs::exists(out / "rgb.txt", ec) || fs::exists(out / "depth.txt", ec))
+    throw InputError(o.out + ": already holds a recording (rgb.txt/depth.txt); choose another --out");
+  fs::create_directories(out / "rgb", ec);
+  if (!ec) fs::create_directories(out / "depth", ec);
+  if (ec) throw InputError(o.out + ": cannot create the folder (" + ec.message() + ")");
+
+  std::unique_ptr<FrameSource> source = openSource(o.source, config);
+  const std::string origin = source->describe();
+  spdlog::info("recording {} into {}", origin, o.out);
+  TumList rgb_list((out / "rgb.txt").string(), "color images", origin);
+  TumList depth_list((out / "depth.txt").string(), "depth maps", origin);
+
+  Frame frame;
+  cv::Mat depth_units;
+  std::uint64_t written = 0, too_far = 0, out_of_order = 0;
+  double last_stamp = 0;
+  char stamp[64];
+  while (!signals.stopRequested() && (o.frames == 0 || written < o.frames)) {
+    const ReadStatus status = source->read(frame);
+    if (status == ReadStatus::kEnd) break;
+    if (status == ReadStatus::kSkipped) continue;
+    if (status == ReadStatus::kTimeout) {
+      if (!source->canReconnect())
+        throw InputError(origin + ": camera stopped delivering frames");
+      spdlog::warn("{}: camera stopped delivering frames; waiting for it (Ctrl-C stops, keeping "
+                   "the {} frames saved)",
+                   origin, written);
+      while (!signals.stopRequested() && !source->reconnect()) {
+      }
+      continue;
+    }
+    // TUM file names are the stamps; a repeated or backwards stamp would clash or mis-sort.
+    std::snprintf(stamp, sizeof stamp, "%.6f", frame.timestamp);
+    const double rounded_stamp = std::strtod(stamp, nullptr);
+    if (written > 0 && rounded_stamp <= last_stamp) {
+      ++out_of_order;
+      spdlog::warn("{}: frame at {} s is not after the previous one ({} s); not recorded", origin,
+                   stamp, last_stamp);
+      continue;
+    }
+    last_stamp = rounded_stamp;
+    const std::string rgb_file = std::string("rgb/") + stamp + ".png";
+    const std::string depth_file = std::string("depth/") + stamp + ".png";
+    writePng(frame.color, out / rgb_file);
+    too_far += toTumDepth(frame.depth, depth_units);
+    writePng(depth_units, out / depth_file);
+    rgb_list.add(stamp, rgb_file);
+    depth_list.add(stamp, depth_file);
+    ++written;
+  }
+  if (too_far > 0)
+    spdlog::warn("{} depth measurements beyond 13.1 m (the 16-bit TUM range) were saved as missing",
+                 too_far);
+  const CameraIntrinsics camera = source->intrinsics();
+  std::printf("recorded %llu frames to %s (%llu skipped by the source, %llu out of order)\n",
+              static_cast<unsigned long long>(written), o.out.c_str(),
+              static_cast<unsigned long long>(source->skipped()),
+              static_cast<unsigned long long>(out_of_order));
+  // A TUM folder holds no intrinsics: say which ones the frames were taken with.
+  std::printf("replay: rgbdmap --source tum:%s --set camera.fx=%g --set camera.fy=%g "
+              "--set camera.cx=%g --set camera.cy=%g",
+              fs::absolute(out).string().c_str(), camera.fx, camera.fy, camera.cx, camera.cy);
+  if (camera.hasDistortion())
+    std::printf(" --set camera.k1=%g --set camera.k2=%g --set camera.p1=%g --set camera.p2=%g "
+                "--set camera.k3=%g",
+                camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace
+
+void addRecordCommand(CLI::App& app, Command& selected) {
+  auto* cmd = app.add_subcommand(
+      "record", "save a source (OpenNI2 camera, .oni file, TUM folder) as a TUM RGB-D folder");
+  auto o = std::make_shared<RecordOptions>();
+  cmd->add_option("-s,--source", o->source, "openni2 | openni2:URI | openni2:FILE.oni | tum:DIR")
+      ->required();
+  cmd->add_option("-o,--out", o->out, "folder to write rgb/, depth/, rgb.txt, depth.txt into")
+      ->required();
+  cmd->add_option("-n,--frames", o->frames, "stop after this many frames (default: all / Ctrl-C)");
+  cmd->add_option("-c,--config", o->config_file, "YAML config: a preset name or a file");
+  cmd->add_option("--set", o->sets, "override a config key (repeatable)");
+  cmd->callback([o, &selected] { selected = [o] { return record(*o); }; });
+}
+
+}  // namespace rgbdmap
