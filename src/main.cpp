@@ -167,6 +167,8 @@ int main(int argc, char** argv) {
   rgbdmap::addAssociateCommand(app, selected);
   rgbdmap::addDevicesCommand(app, selected);
   rgbdmap::addRecordCommand(app, selected);
+  rgbdmap::addSynthCommand(app, selected);
+  rgbdmap::addEvaluateCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

@@ -13,5 +13,7 @@ void addRenderCommand(CLI::App& app, Command& selected);    // tools/render.cpp
 void addAssociateCommand(CLI::App& app, Command& selected); // tools/associate.cpp
 void addDevicesCommand(CLI::App& app, Command& selected);   // tools/devices.cpp
 void addRecordCommand(CLI::App& app, Command& selected);    // tools/record.cpp
+void addSynthCommand(CLI::App& app, Command& selected);     // tools/synth.cpp
+void addEvaluateCommand(CLI::App& app, Command& selected);  // tools/evaluate.cpp
 
 }  // namespace rgbdmap
