@@ -41,7 +41,18 @@ pcl::PCLPointCloud2 loadCloudBlob(const std::string& path, const char* what) {
   if (endsWith(path, ".ply")) {
     result = pcl::io::loadPLYFile(path, blob);
   } else if (endsWith(path, ".pcd")) {
-    result = pcl::io::loadPCDFile(path, blob);
+    // PCL 1.13's reader crashes on a file whose header declares no fields, so the header is
+    // checked first; a header with no points is an empty cloud.
+    pcl::PCDReader reader;
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int version = 0, data_type = 0;
+    unsigned int data_index = 0;
+    if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) < 0 ||
+        blob.fields.empty())
+      throw InputError(path + ": not a PCD file (no valid header with FIELDS)");
+    if (blob.width * blob.height == 0) return blob;
+    result = reader.read(path, blob);
   } else {
     throw InputError(path + ": unknown point cloud format (expected .pcd or .ply)");
   }
