@@ -204,8 +204,8 @@ TEST(MapEvaluation, RecallDropsWhenHalfTheMapIsMissing) {
 
 TEST(MapEvaluation, EmptyMapScoresZero) {
   const SyntheticScene scene = SyntheticScene::defaultRoom();
-  const MapScore score =
-      evaluateMap(pcl::PointCloud<pcl::PointXYZRGB>(), scene, positions(samplesOnScene(scene, 100)));
+  const MapScore score = evaluateMap(pcl::PointCloud<pcl::PointXYZRGB>(), scene,
+                                     positions(samplesOnScene(scene, 100)));
   EXPECT_EQ(score.map_points, 0u);
   EXPECT_EQ(score.precision, 0.0);
   EXPECT_EQ(score.recall, 0.0);
@@ -235,7 +235,8 @@ TEST(MapEvaluation, BadFilesAreNamed) {
 TEST(EvaluateCommand, ReportsBadInputWithTheFileNameAndFails) {
   const std::string dir = test::freshDir();
   std::string output;
-  EXPECT_NE(test::run(test::binary() + " evaluate map " + dir + "/none.pcd --scene " + dir, &output), 0);
+  EXPECT_NE(
+      test::run(test::binary() + " evaluate map " + dir + "/none.pcd --scene " + dir, &output), 0);
   EXPECT_NE(output.find(dir + "/scene.yaml"), std::string::npos) << output;
   std::ofstream(dir + "/estimate.txt") << "1.0 0 0 0 0 0 0 1\n2.0 0 0 nan 0 0 0 1\n";
   const Trajectory gt = circle(3.0);
@@ -259,11 +260,11 @@ TEST(EvaluateCommand, TrajectoryTableAndJson) {
   gt.save(dir + "/gt.txt");
   estimate.save(dir + "/estimate.txt");
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " evaluate trajectory --estimate " + dir +
-                          "/estimate.txt --groundtruth " + dir + "/gt.txt --json " + dir +
-                          "/result.json",
-                      &output),
-            0)
+  ASSERT_EQ(
+      test::run(test::binary() + " evaluate trajectory --estimate " + dir +
+                    "/estimate.txt --groundtruth " + dir + "/gt.txt --json " + dir + "/result.json",
+                &output),
+      0)
       << output;
   EXPECT_NE(output.find("ATE"), std::string::npos) << output;
   EXPECT_NE(output.find("RPE"), std::string::npos) << output;

@@ -2,6 +2,7 @@
 // distances checked by hand, the YAML round trip, and a short sequence read back as TUM.
 #include <gtest/gtest.h>
 #include <pcl/io/pcd_io.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -65,18 +66,18 @@ TEST(SyntheticScene, DistanceToTheNearestSurfaceIsExact) {
   // From the room's centre the nearest surface is the table's top corner (0.6, -0.8, 0.75),
   // nearer than floor and ceiling (1.4).
   EXPECT_NEAR(scene.distance(V(0, 0, 1.4)), std::sqrt(0.6 * 0.6 + 0.8 * 0.8 + 0.65 * 0.65), 1e-12);
-  EXPECT_NEAR(scene.distance(V(0, 0.5, 1.6)), 1.2, 1e-12);  // ceiling
-  EXPECT_NEAR(scene.distance(V(0, 0, 0.3)), 0.3, 1e-12);  // floor
-  EXPECT_NEAR(scene.distance(V(2.4, 0, 1.4)), 0.1, 1e-12);  // wall x = 2.5
+  EXPECT_NEAR(scene.distance(V(0, 0.5, 1.6)), 1.2, 1e-12);      // ceiling
+  EXPECT_NEAR(scene.distance(V(0, 0, 0.3)), 0.3, 1e-12);        // floor
+  EXPECT_NEAR(scene.distance(V(2.4, 0, 1.4)), 0.1, 1e-12);      // wall x = 2.5
   EXPECT_NEAR(scene.distance(V(1.2, -1.2, 0.5)), 0.25, 1e-12);  // inside the table, under its top
   EXPECT_NEAR(scene.distance(V(1.85, 1.2, 0.35)), 0.0, 1e-12);  // on the ball
   EXPECT_NEAR(scene.distance(V(1.5, 1.2, 0.45)), 0.25, 1e-12);  // inside the ball
   // Outside a corner of the table top: distance to the edge, not to either face's plane.
   EXPECT_NEAR(scene.distance(V(1.83, -0.76, 0.75)), 0.05, 1e-12);
   EXPECT_TRUE(scene.isFreeSpace(V(0, 0, 1.4), 0.25));
-  EXPECT_FALSE(scene.isFreeSpace(V(1.2, -1.2, 0.5), 0.0));   // in the table
-  EXPECT_FALSE(scene.isFreeSpace(V(3.0, 0.0, 1.4), 0.0));    // outside the room
-  EXPECT_FALSE(scene.isFreeSpace(V(0.0, 0.0, 0.1), 0.25));   // too near the floor
+  EXPECT_FALSE(scene.isFreeSpace(V(1.2, -1.2, 0.5), 0.0));  // in the table
+  EXPECT_FALSE(scene.isFreeSpace(V(3.0, 0.0, 1.4), 0.0));   // outside the room
+  EXPECT_FALSE(scene.isFreeSpace(V(0.0, 0.0, 0.1), 0.25));  // too near the floor
 }
 
 TEST(SyntheticScene, YamlRoundTripKeepsEveryPrimitive) {
@@ -110,10 +111,12 @@ TEST(SyntheticScene, YamlRoundTripKeepsEveryPrimitive) {
 TEST(SyntheticScene, BadYamlNamesFileLineAndProblem) {
   const std::string dir = test::freshDir();
   const std::string path = dir + "/scene.yaml";
-  std::ofstream(path) << "primitives:\n"
-                         "  - kind: room\n    min: [-1, -1, 0]\n    max: [1, 1, 2]\n"
-                         "    texture: {pattern: checker, color_a: [1, 2, 3], color_b: [4, 5, 6], scale: 0.2}\n"
-                         "  - kind: cone\n    texture: {pattern: checker, color_a: [1, 2, 3], color_b: [4, 5, 6], scale: 0.2}\n";
+  std::ofstream(path)
+      << "primitives:\n"
+         "  - kind: room\n    min: [-1, -1, 0]\n    max: [1, 1, 2]\n"
+         "    texture: {pattern: checker, color_a: [1, 2, 3], color_b: [4, 5, 6], scale: 0.2}\n"
+         "  - kind: cone\n    texture: {pattern: checker, color_a: [1, 2, 3], color_b: [4, 5, 6], "
+         "scale: 0.2}\n";
   try {
     SyntheticScene::load(path);
     FAIL() << "expected an InputError";
@@ -132,7 +135,8 @@ TEST(SyntheticScene, HandheldPathStaysInFreeSpaceForAnySeed) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const HandheldPath path(scene.room(), seed, 12.0);
     for (double t = 0.0; t < 60.0; t += 0.01)
-      ASSERT_TRUE(scene.isFreeSpace(path.pose(t).translation(), 0.25)) << "seed " << seed << " t " << t;
+      ASSERT_TRUE(scene.isFreeSpace(path.pose(t).translation(), 0.25))
+          << "seed " << seed << " t " << t;
   }
 }
 
@@ -145,7 +149,10 @@ class SyntheticSequenceTest : public ::testing::Test {
   static std::string noisy_, clean_;
 
   static void SetUpTestSuite() {
-    const std::string root = std::string(RGBDMAP_TEST_TMP) + "/SyntheticSequenceTest";
+    // One folder per process: CTest runs each test of this suite as its own process, in
+    // parallel with -j.
+    root_ = std::string(RGBDMAP_TEST_TMP) + "/SyntheticSequenceTest." + std::to_string(::getpid());
+    const std::string& root = root_;
     std::filesystem::remove_all(root);
     noisy_ = root + "/noisy";
     clean_ = root + "/clean";
@@ -156,7 +163,11 @@ class SyntheticSequenceTest : public ::testing::Test {
     options.noise = false;
     writeSyntheticSequence(clean_, SyntheticScene::defaultRoom(), options);
   }
+  static void TearDownTestSuite() { std::filesystem::remove_all(root_); }
+
+  static std::string root_;
 };
+std::string SyntheticSequenceTest::root_;
 std::string SyntheticSequenceTest::noisy_;
 std::string SyntheticSequenceTest::clean_;
 
@@ -297,7 +308,8 @@ TEST_F(SyntheticSequenceTest, SameSeedSameImagesOtherSeedOtherNoise) {
   ASSERT_FALSE(a.empty());
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
   EXPECT_GT(cv::norm(a, c, cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::norm(cv::imread(first[1].rgb_path), cv::imread(again[1].rgb_path), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(cv::imread(first[1].rgb_path), cv::imread(again[1].rgb_path), cv::NORM_INF),
+            0.0);
 }
 
 TEST_F(SyntheticSequenceTest, VisibleSurfaceSamplesLieExactlyOnTheScene) {

@@ -48,14 +48,14 @@ int evaluateMapCommand(const std::string& map_path, const std::string& scene, do
   return 0;
 }
 
-int evaluateTrajectoryCommand(const std::string& estimate_path,
-                              const std::string& groundtruth_path, double max_difference,
-                              double interval, const std::string& json) {
+int evaluateTrajectoryCommand(const std::string& estimate_path, const std::string& groundtruth_path,
+                              double max_difference, double interval, const std::string& json) {
   const Trajectory estimate = Trajectory::load(estimate_path);
   const Trajectory groundtruth = Trajectory::load(groundtruth_path);
   if (estimate.empty()) throw InputError(estimate_path + ": no poses");
   if (groundtruth.empty()) throw InputError(groundtruth_path + ": no poses");
-  const AbsoluteTrajectoryError ate = absoluteTrajectoryError(estimate, groundtruth, max_difference);
+  const AbsoluteTrajectoryError ate =
+      absoluteTrajectoryError(estimate, groundtruth, max_difference);
   std::printf("estimate      %s (%zu poses)\n", estimate_path.c_str(), estimate.size());
   std::printf("groundtruth   %s (%zu poses)\n", groundtruth_path.c_str(), groundtruth.size());
   std::printf("ATE (m)       rmse %.4f   mean %.4f   median %.4f   max %.4f   (%zu pairs)\n",
@@ -82,9 +82,10 @@ int evaluateTrajectoryCommand(const std::string& estimate_path,
 }  // namespace
 
 void addEvaluateCommand(CLI::App& app, Command& selected) {
-  auto* cmd = app.add_subcommand(
-      "evaluate", "score a map against a synthetic scene (map), or a trajectory against "
-                  "groundtruth with TUM's ATE/RPE (trajectory)");
+  auto* cmd =
+      app.add_subcommand("evaluate",
+                         "score a map against a synthetic scene (map), or a trajectory against "
+                         "groundtruth with TUM's ATE/RPE (trajectory)");
   cmd->require_subcommand(1);
 
   struct MapOptions {
@@ -93,10 +94,12 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
   };
   auto m = std::make_shared<MapOptions>();
   auto* map_cmd = cmd->add_subcommand(
-      "map", "precision, recall, F-score at tau and distances of a map (PCD/PLY) to the exact "
-             "surfaces of a sequence written by `rgbdmap synth`");
+      "map",
+      "precision, recall, F-score at tau and distances of a map (PCD/PLY) to the exact "
+      "surfaces of a sequence written by `rgbdmap synth`");
   map_cmd->add_option("map", m->map, "map file (.pcd or .ply)")->required();
-  map_cmd->add_option("--scene", m->scene, "sequence folder with scene.yaml and visible_surface.pcd")
+  map_cmd
+      ->add_option("--scene", m->scene, "sequence folder with scene.yaml and visible_surface.pcd")
       ->required();
   map_cmd->add_option("--tau", m->tau, "distance threshold (m)")
       ->capture_default_str()
@@ -113,8 +116,10 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
   auto t = std::make_shared<TrajectoryOptions>();
   auto* trajectory_cmd = cmd->add_subcommand(
       "trajectory", "ATE (after rigid alignment) and RPE of an estimated TUM trajectory");
-  trajectory_cmd->add_option("--estimate", t->estimate, "estimated trajectory (TUM format)")->required();
-  trajectory_cmd->add_option("--groundtruth", t->groundtruth, "groundtruth (TUM format)")->required();
+  trajectory_cmd->add_option("--estimate", t->estimate, "estimated trajectory (TUM format)")
+      ->required();
+  trajectory_cmd->add_option("--groundtruth", t->groundtruth, "groundtruth (TUM format)")
+      ->required();
   trajectory_cmd->add_option("--max-difference", t->max_difference, "association window (s)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
@@ -124,8 +129,8 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
   trajectory_cmd->add_option("--json", t->json, "also write the results as JSON");
   trajectory_cmd->callback([t, &selected] {
     selected = [t] {
-      return evaluateTrajectoryCommand(t->estimate, t->groundtruth, t->max_difference,
-                                       t->interval, t->json);
+      return evaluateTrajectoryCommand(t->estimate, t->groundtruth, t->max_difference, t->interval,
+                                       t->json);
     };
   });
 }

@@ -25,10 +25,13 @@ void addSynthCommand(CLI::App& app, Command& selected) {
   cmd->add_option("-n,--frames", o->sequence.frames, "number of frames")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
-  cmd->add_option("--seed", o->sequence.seed, "random seed (noise, path sway)")->capture_default_str();
+  cmd->add_option("--seed", o->sequence.seed, "random seed (noise, path sway)")
+      ->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise,
                 "exact depth (only quantised to 1/depth_scale), no dropouts, no colour noise");
-  cmd->add_option("--fps", o->sequence.fps, "frame rate (Hz)")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
+  cmd->add_option("--fps", o->sequence.fps, "frame rate (Hz)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--loop-seconds", o->sequence.loop_seconds,
                   "seconds for one circle of the room (smaller: faster camera)")
       ->capture_default_str()
@@ -40,8 +43,9 @@ void addSynthCommand(CLI::App& app, Command& selected) {
                   "degrees: surfaces seen more obliquely give no depth")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 90.0));
-  cmd->add_option("--scene", o->scene, "scene description (YAML, as the scene.yaml it writes); "
-                                       "default: the built-in room");
+  cmd->add_option("--scene", o->scene,
+                  "scene description (YAML, as the scene.yaml it writes); "
+                  "default: the built-in room");
   cmd->add_option("--png-compression", o->sequence.png_compression, "zlib level 0..9")
       ->capture_default_str()
       ->check(CLI::Range(0, 9));

@@ -14,7 +14,7 @@ namespace rgbdmap {
 // precision = share of map points within tau of the true surface, recall = share of reference
 // surface samples with a map point within tau, F = their harmonic mean.
 struct MapScore {
-  double tau = 0.01;  // m
+  double tau = 0.01;                 // m
   std::size_t map_points = 0;        // finite points scored
   std::size_t reference_points = 0;  // visible surface samples
   double precision = 0.0;

@@ -43,8 +43,8 @@ class SyntheticScene {
  public:
   void addRoom(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
                const SurfaceTexture& texture, const std::string& name = "room");
-  void addBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
-              const SurfaceTexture& texture, const std::string& name);
+  void addBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max, const SurfaceTexture& texture,
+              const std::string& name);
   void addSphere(const Eigen::Vector3d& center, double radius, const SurfaceTexture& texture,
                  const std::string& name);
 

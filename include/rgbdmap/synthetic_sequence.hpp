@@ -36,7 +36,7 @@ struct SyntheticSequenceOptions {
   double fps = 30.0;
   std::uint64_t seed = 1;
   bool noise = true;  // depth noise, dropouts and colour noise; false: exact depth (quantised)
-  double loop_seconds = 12.0;  // one circle of the room
+  double loop_seconds = 12.0;        // one circle of the room
   double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
   // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
   // always inside the 0.02 s association window). Both images are rendered at the colour
@@ -70,8 +70,8 @@ class SyntheticRenderer {
  public:
   SyntheticRenderer(const SyntheticScene& scene, const CameraIntrinsics& camera);
   // depth: CV_32FC1, color: CV_8UC3, incidence_cos: CV_32FC1, hits: CV_32FC3 world points.
-  void render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv::Mat& color,
-              cv::Mat& incidence_cos, cv::Mat& hits) const;
+  void render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv::Mat& color, cv::Mat& incidence_cos,
+              cv::Mat& hits) const;
 
  private:
   const SyntheticScene& scene_;

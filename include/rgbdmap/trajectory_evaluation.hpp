@@ -27,7 +27,7 @@ ErrorStatistics errorStatistics(std::vector<double> errors);
 // Absolute trajectory error as TUM's evaluate_ate.py: estimate and groundtruth stamps associated
 // with the 0.02 s rule, estimated positions aligned to groundtruth, position residuals (m).
 struct AbsoluteTrajectoryError {
-  ErrorStatistics translation;  // m, after alignment
+  ErrorStatistics translation;                                  // m, after alignment
   Eigen::Isometry3d alignment = Eigen::Isometry3d::Identity();  // estimate -> groundtruth frame
 };
 // Throws InputError when fewer than 3 poses associate.

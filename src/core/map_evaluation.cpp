@@ -70,8 +70,8 @@ pcl::PCLPointCloud2 loadCloudBlob(const std::string& path, const char* what) {
 
 double quantile(std::vector<double>& values, double q) {
   if (values.empty()) return 0.0;
-  const std::size_t k = std::min(values.size() - 1,
-                                 static_cast<std::size_t>(q * static_cast<double>(values.size())));
+  const std::size_t k =
+      std::min(values.size() - 1, static_cast<std::size_t>(q * static_cast<double>(values.size())));
   std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
   return values[k];
 }

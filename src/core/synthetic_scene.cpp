@@ -105,18 +105,24 @@ bool insideBox(const ScenePrimitive& box, const Eigen::Vector3d& p) {
 
 const char* kindName(ScenePrimitive::Kind kind) {
   switch (kind) {
-    case ScenePrimitive::Kind::kRoom: return "room";
-    case ScenePrimitive::Kind::kBox: return "box";
-    case ScenePrimitive::Kind::kSphere: return "sphere";
+    case ScenePrimitive::Kind::kRoom:
+      return "room";
+    case ScenePrimitive::Kind::kBox:
+      return "box";
+    case ScenePrimitive::Kind::kSphere:
+      return "sphere";
   }
   return "?";
 }
 
 const char* patternName(SurfaceTexture::Pattern pattern) {
   switch (pattern) {
-    case SurfaceTexture::Pattern::kChecker: return "checker";
-    case SurfaceTexture::Pattern::kStripes: return "stripes";
-    case SurfaceTexture::Pattern::kWaves: return "waves";
+    case SurfaceTexture::Pattern::kChecker:
+      return "checker";
+    case SurfaceTexture::Pattern::kStripes:
+      return "stripes";
+    case SurfaceTexture::Pattern::kWaves:
+      return "waves";
   }
   return "?";
 }
@@ -201,8 +207,8 @@ class SceneReader {
     } else if (pattern == "waves") {
       texture.pattern = SurfaceTexture::Pattern::kWaves;
     } else {
-      fail(node["pattern"], name + ".pattern '" + pattern +
-                                "' is unknown (expected checker, stripes or waves)");
+      fail(node["pattern"],
+           name + ".pattern '" + pattern + "' is unknown (expected checker, stripes or waves)");
     }
     texture.color_a = color(node, "color_a", name);
     texture.color_b = color(node, "color_b", name);
@@ -300,8 +306,9 @@ bool SyntheticScene::raycast(const Eigen::Vector3d& origin, const Eigen::Vector3
   for (const ScenePrimitive& p : primitives_) {
     double t_hit = 0.0;
     int axis = -1;
-    const bool found = p.kind == ScenePrimitive::Kind::kSphere ? hitSphere(p, origin, direction, t_hit)
-                                                               : hitBox(p, origin, direction, t_hit, axis);
+    const bool found = p.kind == ScenePrimitive::Kind::kSphere
+                           ? hitSphere(p, origin, direction, t_hit)
+                           : hitBox(p, origin, direction, t_hit, axis);
     if (found && t_hit < best) {
       best = t_hit;
       hit = &p;

@@ -170,12 +170,12 @@ Eigen::Isometry3d HandheldPath::pose(double t) const {
   const double phi = 2.0 * M_PI * t / loop_seconds_;
   // Slow circle plus a slow sway (a few cm) and a fast tremor (1 cm), as a hand holds a camera.
   const Eigen::Vector3d position =
-      center_ + Eigen::Vector3d(radius_.x() * std::cos(phi) + 0.05 * std::sin(2.3 * t + phase_[0]) +
-                                    0.01 * std::sin(7.1 * t + phase_[1]),
-                                radius_.y() * std::sin(phi) + 0.05 * std::sin(1.9 * t + phase_[2]) +
-                                    0.01 * std::sin(6.3 * t + phase_[3]),
-                                0.10 * std::sin(0.9 * t + phase_[4]) +
-                                    0.008 * std::sin(8.3 * t + phase_[5]));
+      center_ +
+      Eigen::Vector3d(radius_.x() * std::cos(phi) + 0.05 * std::sin(2.3 * t + phase_[0]) +
+                          0.01 * std::sin(7.1 * t + phase_[1]),
+                      radius_.y() * std::sin(phi) + 0.05 * std::sin(1.9 * t + phase_[2]) +
+                          0.01 * std::sin(6.3 * t + phase_[3]),
+                      0.10 * std::sin(0.9 * t + phase_[4]) + 0.008 * std::sin(8.3 * t + phase_[5]));
   // Look outwards, swinging +-17 degrees around the radial direction and 11-25 degrees down,
   // so surfaces are seen from several positions and angles.
   const double yaw = phi + 0.3 * std::sin(2.0 * M_PI * t / 4.1 + phase_[6]);
@@ -273,8 +273,8 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     const Eigen::Vector3d p = path.pose(k / options.groundtruth_rate).translation();
     if (!scene.isFreeSpace(p, options.camera_margin))
       throw InputError("synthetic sequence: the camera path comes within " +
-                       std::to_string(options.camera_margin) + " m of a surface at t = " +
-                       std::to_string(k / options.groundtruth_rate) +
+                       std::to_string(options.camera_margin) +
+                       " m of a surface at t = " + std::to_string(k / options.groundtruth_rate) +
                        " s; the scene leaves too little free space around the room's centre");
   }
 
@@ -340,7 +340,8 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
             const bool dropped = uniform(random) < options.dropout;
             for (int c = 0; c < 3; ++c) {
               const double value = color_row[u][c] + options.color_noise * gauss(random);
-              color_row[u][c] = static_cast<unsigned char>(std::clamp(std::lround(value), 0l, 255l));
+              color_row[u][c] =
+                  static_cast<unsigned char>(std::clamp(std::lround(value), 0l, 255l));
             }
             if (measured > 0.0) measured += kinectDepthSigma(z) * n;
             if (dropped || measured < options.min_range || measured > options.max_range)
@@ -367,8 +368,10 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& jobs) {
       for (int job = jobs.start; job < jobs.end; ++job) {
         try {
-          if (job == 0) writeImage(folder + "/" + rgb_name, color, options.png_compression);
-          else writeImage(folder + "/" + depth_name, depth16, options.png_compression);
+          if (job == 0)
+            writeImage(folder + "/" + rgb_name, color, options.png_compression);
+          else
+            writeImage(folder + "/" + depth_name, depth16, options.png_compression);
         } catch (const std::exception& e) {
           write_errors[job] = e.what();
         }
@@ -403,8 +406,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   summary.surface_points = cloud.size();
   summary.valid_depth_share = static_cast<double>(valid_pixels) /
                               (static_cast<double>(options.frames) * camera.width * camera.height);
-  summary.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   writeOptions(folder + "/synthetic.yaml", options, summary);
   return summary;
 }

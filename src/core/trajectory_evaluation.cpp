@@ -56,7 +56,8 @@ ErrorStatistics errorStatistics(std::vector<double> errors) {
   std::nth_element(errors.begin(), errors.begin() + static_cast<long>(mid), errors.end());
   s.median = errors[mid];
   if (errors.size() % 2 == 0)
-    s.median = 0.5 * (s.median + *std::max_element(errors.begin(), errors.begin() + static_cast<long>(mid)));
+    s.median = 0.5 * (s.median +
+                      *std::max_element(errors.begin(), errors.begin() + static_cast<long>(mid)));
   return s;
 }
 
@@ -90,7 +91,8 @@ RelativePoseError relativePoseError(const Trajectory& estimate, const Trajectory
   const std::vector<double> est_stamps = estimate.timestamps();
   const std::vector<double> gt_stamps = groundtruth.timestamps();
   std::vector<double> spacing;
-  for (std::size_t i = 1; i < gt_stamps.size(); ++i) spacing.push_back(gt_stamps[i] - gt_stamps[i - 1]);
+  for (std::size_t i = 1; i < gt_stamps.size(); ++i)
+    spacing.push_back(gt_stamps[i] - gt_stamps[i - 1]);
   const double max_gt_difference = 2.0 * errorStatistics(spacing).median;
 
   std::vector<double> translation, rotation;
