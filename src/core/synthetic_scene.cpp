@@ -30,6 +30,17 @@ double cellNoise(std::int64_t i, std::int64_t j) {
 
 std::int64_t floorIndex(double x) { return static_cast<std::int64_t>(std::floor(x)); }
 
+// Smooth random values in [0, 1] (value noise: random lattice values, smoothstep-interpolated).
+double valueNoise(double x, double y) {
+  const std::int64_t i = floorIndex(x), j = floorIndex(y);
+  const double fx = x - static_cast<double>(i), fy = y - static_cast<double>(j);
+  const double sx = fx * fx * (3.0 - 2.0 * fx), sy = fy * fy * (3.0 - 2.0 * fy);
+  // Offsets keep the lattice's values independent of the pattern cells' cellNoise.
+  const double a = cellNoise(i + 7919, j - 104729), b = cellNoise(i + 7920, j - 104729);
+  const double c = cellNoise(i + 7919, j - 104728), d = cellNoise(i + 7920, j - 104728);
+  return (a * (1.0 - sx) + b * sx) * (1.0 - sy) + (c * (1.0 - sx) + d * sx) * sy;
+}
+
 // Slab test of a ray against an axis-aligned box's surface. Hits the entry face when the origin
 // is outside and the exit face when it is inside (the room is seen from within).
 bool hitBox(const ScenePrimitive& box, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
@@ -251,6 +262,9 @@ cv::Vec3b SurfaceTexture::colorAt(double u, double v) const {
       break;
     }
   }
+  // A fine grain (3 cm) over every pattern, as real surfaces have: without it the inside of
+  // a checker square is flat and image alignment only has the squares' edges to work with.
+  brightness *= 0.8 + 0.4 * valueNoise(u / 0.03, v / 0.03);
   cv::Vec3b out;
   for (int c = 0; c < 3; ++c) {
     const double value = brightness * ((1.0 - weight) * color_a[c] + weight * color_b[c]);
