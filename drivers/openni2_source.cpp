@@ -27,28 +27,36 @@ constexpr std::chrono::milliseconds kReconnectWindow{1000};
 constexpr std::chrono::milliseconds kReconnectRetry{200};
 constexpr int kFps = 30;
 
-// Initialises OpenNI2 once per process and shuts it down after its last user. Every object that
+// Initialises OpenNI2 for its first user and shuts it down after its last one. Every object that
 // holds OpenNI2 state keeps a reference, so none outlives OpenNI::shutdown() (a known crash).
+// Nothing static holds a reference: shutting down from an exit handler, after the drivers' own
+// statics are gone, makes Debian's PS1080 driver free memory twice.
 class OpenNI2Runtime {
  public:
   static std::shared_ptr<OpenNI2Runtime> acquire() {
-    static std::mutex mutex;
-    static std::shared_ptr<OpenNI2Runtime> instance;
-    std::lock_guard<std::mutex> lock(mutex);
-    if (!instance) {
-      if (openni::OpenNI::initialize() != openni::STATUS_OK)
-        throw InputError(std::string("OpenNI2 cannot start: ") +
-                         openni::OpenNI::getExtendedError());
-      instance.reset(new OpenNI2Runtime);
-    }
-    return instance;
+    std::lock_guard<std::mutex> lock(mutex());
+    if (users() == 0 && openni::OpenNI::initialize() != openni::STATUS_OK)
+      throw InputError(std::string("OpenNI2 cannot start: ") + openni::OpenNI::getExtendedError());
+    ++users();
+    return std::shared_ptr<OpenNI2Runtime>(new OpenNI2Runtime, [](OpenNI2Runtime* runtime) {
+      delete runtime;
+      std::lock_guard<std::mutex> lock(mutex());
+      if (--users() == 0) openni::OpenNI::shutdown();
+    });
   }
-  ~OpenNI2Runtime() { openni::OpenNI::shutdown(); }
   OpenNI2Runtime(const OpenNI2Runtime&) = delete;
   OpenNI2Runtime& operator=(const OpenNI2Runtime&) = delete;
 
  private:
   OpenNI2Runtime() = default;
+  static std::mutex& mutex() {
+    static std::mutex instance;
+    return instance;
+  }
+  static int& users() {
+    static int count = 0;
+    return count;
+  }
 };
 
 // OpenNI2's extended error without its tabs and trailing newlines.

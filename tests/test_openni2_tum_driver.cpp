@@ -250,59 +250,103 @@ class OpenNI2TumDriver : public ::testing::Test {
   bool initialized_ = false;
 };
 
+// The frames one play of a folder through the device delivered, in order.
+struct Playback {
+  std::vector<ReadFrame> depths;
+  std::vector<ReadFrame> colors;
+  double seconds = 0;
+};
+
+Playback playOnce(const std::string& folder) {
+  Playback play;
+  openni::Device device;
+  EXPECT_EQ(device.open(("tum:" + folder).c_str()), openni::STATUS_OK)
+      << openni::OpenNI::getExtendedError();
+  openni::VideoStream depth, color;
+  EXPECT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
+  EXPECT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
+  EXPECT_EQ(device.setDepthColorSyncEnabled(true), openni::STATUS_OK);
+  const Clock::time_point start = Clock::now();
+  EXPECT_EQ(depth.start(), openni::STATUS_OK);
+  EXPECT_EQ(color.start(), openni::STATUS_OK);
+  const std::vector<ReadFrame> frames = readFrames({&depth, &color}, 1000, 1500);
+  play.seconds = std::chrono::duration<double>(Clock::now() - start).count() - 1.5;
+  // Without loop=1 the device has nothing more to send (readFrames waited 1.5 s for more).
+  depth.stop();
+  color.stop();
+  play.depths = ofSensor(frames, openni::SENSOR_DEPTH);
+  play.colors = ofSensor(frames, openni::SENSOR_COLOR);
+  return play;
+}
+
 TEST_F(OpenNI2TumDriver, FramesAreBitIdenticalToTheFolderAtTheRecordedTiming) {
   TumSequence sequence(test::tumDir(kXyz));
   ASSERT_EQ(sequence.size(), 32u);
 
-  openni::Device device;
-  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK)
-      << openni::OpenNI::getExtendedError();
-  EXPECT_STREQ(device.getDeviceInfo().getVendor(), "TUM RGB-D");
-  EXPECT_STREQ(device.getDeviceInfo().getName(), kXyz.c_str());
-  openni::VideoStream depth, color;
-  ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
-  ASSERT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
-  EXPECT_EQ(depth.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_DEPTH_100_UM);
-  EXPECT_EQ(depth.getVideoMode().getResolutionX(), 640);
-  EXPECT_EQ(depth.getVideoMode().getResolutionY(), 480);
-  EXPECT_EQ(color.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_RGB888);
-  EXPECT_EQ(color.getVideoMode().getResolutionX(), 640);
-  EXPECT_EQ(color.getVideoMode().getResolutionY(), 480);
-  EXPECT_EQ(device.setDepthColorSyncEnabled(true), openni::STATUS_OK);
-
-  const Clock::time_point start = Clock::now();
-  ASSERT_EQ(depth.start(), openni::STATUS_OK);
-  ASSERT_EQ(color.start(), openni::STATUS_OK);
-  std::vector<ReadFrame> frames = readFrames({&depth, &color}, 2 * sequence.size());
-  const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-  // Without loop=1 the device has nothing more to send.
-  const std::vector<ReadFrame> extra = readFrames({&depth, &color}, 1, 400);
-  EXPECT_TRUE(extra.empty()) << "frame " << extra.front().index << " after the end";
-  depth.stop();
-  color.stop();
-
-  const std::vector<ReadFrame> depths = ofSensor(frames, openni::SENSOR_DEPTH);
-  const std::vector<ReadFrame> colors = ofSensor(frames, openni::SENSOR_COLOR);
-  ASSERT_EQ(depths.size(), sequence.size());
-  ASSERT_EQ(colors.size(), sequence.size());
-  for (std::size_t i = 0; i < sequence.size(); ++i) {
-    SCOPED_TRACE("pair " + std::to_string(i) + ": " + sequence[i].depth_path);
-    EXPECT_EQ(depths[i].index, static_cast<int>(i + 1));
-    EXPECT_EQ(colors[i].index, static_cast<int>(i + 1));
-    EXPECT_EQ(depths[i].timestamp, microseconds(sequence[i].depth_time));
-    EXPECT_EQ(colors[i].timestamp, microseconds(sequence[i].rgb_time));
-    const cv::Mat raw = rawDepth(sequence, i);
-    double max_raw = 0;
-    cv::minMaxLoc(raw, nullptr, &max_raw);
-    EXPECT_LE(max_raw, 32767) << "beyond 6.5535 m: not representable in 100 um";
-    EXPECT_EQ(depths[i].format, openni::PIXEL_FORMAT_DEPTH_100_UM);
-    EXPECT_EQ(differences(depths[i].image, expectedDepth100um(raw)), 0);
-    EXPECT_EQ(colors[i].format, openni::PIXEL_FORMAT_RGB888);
-    EXPECT_EQ(differences(colors[i].image, rgbColor(sequence, i)), 0);
+  {
+    openni::Device device;
+    ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK)
+        << openni::OpenNI::getExtendedError();
+    EXPECT_STREQ(device.getDeviceInfo().getVendor(), "TUM RGB-D");
+    EXPECT_STREQ(device.getDeviceInfo().getName(), kXyz.c_str());
+    openni::VideoStream depth, color;
+    ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
+    ASSERT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
+    EXPECT_EQ(depth.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_DEPTH_100_UM);
+    EXPECT_EQ(depth.getVideoMode().getResolutionX(), 640);
+    EXPECT_EQ(depth.getVideoMode().getResolutionY(), 480);
+    EXPECT_EQ(color.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_RGB888);
+    EXPECT_EQ(color.getVideoMode().getResolutionX(), 640);
+    EXPECT_EQ(color.getVideoMode().getResolutionY(), 480);
   }
-  // Played at the recorded pace (fr1/xyz: 32 pairs over ~1.07 s), not as fast as possible.
+
+  // A device plays at the recorded pace like a camera: OpenNI2 keeps only the newest frame of a
+  // stream, so a reader stalled for a frame interval (a loaded machine, a sanitizer build) loses
+  // that frame. Every delivered frame must be exact; frames lost to a stall are looked for in
+  // another play, so every frame of the folder is compared.
+  std::vector<bool> seen_depth(sequence.size(), false), seen_color(sequence.size(), false);
   const double recorded = sequence[sequence.size() - 1].rgb_time - sequence[0].rgb_time;
-  EXPECT_GE(elapsed, 0.9 * recorded);
+  for (int pass = 0; pass < 4; ++pass) {
+    const Playback play = playOnce(test::tumDir(kXyz));
+    ASSERT_FALSE(play.depths.empty());
+    ASSERT_FALSE(play.colors.empty());
+    // Played at the recorded pace (fr1/xyz: 32 pairs over ~1.07 s), not as fast as possible.
+    EXPECT_GE(play.seconds, 0.9 * recorded);
+    EXPECT_EQ(play.depths.back().index, static_cast<int>(sequence.size()));
+    for (const std::vector<ReadFrame>* frames : {&play.depths, &play.colors}) {
+      int previous = 0;
+      for (const ReadFrame& frame : *frames) {
+        // Indices count from 1 and only ever increase; a gap is a frame lost to a stall.
+        ASSERT_GT(frame.index, previous);
+        ASSERT_LE(frame.index, static_cast<int>(sequence.size()));
+        previous = frame.index;
+        const std::size_t i = static_cast<std::size_t>(frame.index - 1);
+        SCOPED_TRACE("pair " + std::to_string(i) + ": " + sequence[i].depth_path);
+        if (frame.sensor == openni::SENSOR_DEPTH) {
+          seen_depth[i] = true;
+          EXPECT_EQ(frame.timestamp, microseconds(sequence[i].depth_time));
+          const cv::Mat raw = rawDepth(sequence, i);
+          double max_raw = 0;
+          cv::minMaxLoc(raw, nullptr, &max_raw);
+          EXPECT_LE(max_raw, 32767) << "beyond 6.5535 m: not representable in 100 um";
+          EXPECT_EQ(frame.format, openni::PIXEL_FORMAT_DEPTH_100_UM);
+          EXPECT_EQ(differences(frame.image, expectedDepth100um(raw)), 0);
+        } else {
+          seen_color[i] = true;
+          EXPECT_EQ(frame.timestamp, microseconds(sequence[i].rgb_time));
+          EXPECT_EQ(frame.format, openni::PIXEL_FORMAT_RGB888);
+          EXPECT_EQ(differences(frame.image, rgbColor(sequence, i)), 0);
+        }
+      }
+    }
+    if (std::count(seen_depth.begin(), seen_depth.end(), false) == 0 &&
+        std::count(seen_color.begin(), seen_color.end(), false) == 0)
+      break;
+  }
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    EXPECT_TRUE(seen_depth[i]) << "depth " << i << " never delivered in 4 plays";
+    EXPECT_TRUE(seen_color[i]) << "colour " << i << " never delivered in 4 plays";
+  }
 }
 
 TEST_F(OpenNI2TumDriver, MillimetreModeIsTheSameDepthRounded) {

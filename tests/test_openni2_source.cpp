@@ -1,0 +1,326 @@
+// The OpenNI2 source on the real Kinect v1 recording: frame count, units, colour order, timing,
+// reopening (the reconnect path a replugged camera takes) and clean failures on bad files.
+
+#include <OpenNI.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "rgbdmap/config.hpp"
+#include "rgbdmap/error.hpp"
+#include "rgbdmap/openni2_source.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::string oniFile() { return test::dataDir() + "/oni/kinect_v1_12frames.oni"; }
+
+Config kinectConfig(double rate = 0) {
+  Config config;
+  config.loadPreset("kinect_v1");
+  config.rate = rate;
+  return config;
+}
+
+struct Captured {
+  double timestamp;
+  cv::Mat depth;  // metres
+  cv::Mat color;  // BGR
+};
+
+std::vector<Captured> readAll(FrameSource& source, std::size_t limit = 1000) {
+  std::vector<Captured> frames;
+  Frame frame;
+  while (frames.size() < limit) {
+    const ReadStatus status = source.read(frame);
+    if (status == ReadStatus::kEnd) break;
+    EXPECT_EQ(status, ReadStatus::kFrame);
+    if (status != ReadStatus::kFrame) break;
+    frames.push_back({frame.timestamp, frame.depth.clone(), frame.color.clone()});
+  }
+  return frames;
+}
+
+// Depth and colour straight from openni::VideoStream::readFrame on the file, frame by frame.
+struct DirectFrames {
+  std::vector<cv::Mat> depth_mm;  // CV_16UC1 as OpenNI2 gives it
+  std::vector<cv::Mat> rgb;       // CV_8UC3 RGB
+  std::vector<std::uint64_t> color_stamps;
+};
+
+DirectFrames readDirectly(const std::string& path) {
+  DirectFrames out;
+  EXPECT_EQ(openni::OpenNI::initialize(), openni::STATUS_OK);
+  {
+    openni::Device device;
+    EXPECT_EQ(device.open(path.c_str()), openni::STATUS_OK) << openni::OpenNI::getExtendedError();
+    openni::VideoStream depth, color;
+    EXPECT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
+    EXPECT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
+    EXPECT_EQ(depth.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_DEPTH_1_MM);
+    device.getPlaybackControl()->setSpeed(-1.0f);
+    device.getPlaybackControl()->setRepeatEnabled(false);
+    depth.start();
+    color.start();
+    openni::VideoStream* streams[] = {&depth, &color};
+    openni::VideoFrameRef ref;
+    int ready = -1;
+    while (openni::OpenNI::waitForAnyStream(streams, 2, &ready, 1000) == openni::STATUS_OK) {
+      streams[ready]->readFrame(&ref);
+      if (ready == 0) {
+        out.depth_mm.push_back(cv::Mat(ref.getHeight(), ref.getWidth(), CV_16UC1,
+                                       const_cast<void*>(ref.getData()), ref.getStrideInBytes())
+                                   .clone());
+      } else {
+        out.rgb.push_back(cv::Mat(ref.getHeight(), ref.getWidth(), CV_8UC3,
+                                  const_cast<void*>(ref.getData()), ref.getStrideInBytes())
+                              .clone());
+        out.color_stamps.push_back(ref.getTimestamp());
+      }
+    }
+    ref.release();
+    depth.stop();
+    color.stop();
+    depth.destroy();
+    color.destroy();
+    device.close();
+  }
+  openni::OpenNI::shutdown();
+  return out;
+}
+
+struct DepthStats {
+  double valid_share = 0;
+  double min = 0, max = 0, median = 0;  // metres, over valid pixels
+};
+
+DepthStats statsOf(const cv::Mat& metres) {
+  std::vector<float> valid;
+  for (int y = 0; y < metres.rows; ++y)
+    for (int x = 0; x < metres.cols; ++x)
+      if (metres.at<float>(y, x) > 0) valid.push_back(metres.at<float>(y, x));
+  DepthStats s;
+  if (valid.empty()) return s;
+  std::sort(valid.begin(), valid.end());
+  s.valid_share = static_cast<double>(valid.size()) / metres.total();
+  s.min = valid.front();
+  s.max = valid.back();
+  s.median = valid[valid.size() / 2];
+  return s;
+}
+
+TEST(OpenNI2Source, RecordingYieldsItsTwelveFramesThenEnds) {
+  auto source = openOpenNI2Source(oniFile(), kinectConfig());
+  EXPECT_FALSE(source->isLive());
+  EXPECT_FALSE(source->canReconnect());
+  EXPECT_FALSE(source->providesPoses());
+  EXPECT_NE(source->describe().find("12 depth + 12 colour"), std::string::npos)
+      << source->describe();
+  const CameraIntrinsics camera = source->intrinsics();
+  EXPECT_EQ(camera.width, 640);
+  EXPECT_EQ(camera.height, 480);
+  EXPECT_DOUBLE_EQ(camera.fx, 525.0);
+
+  Frame frame;
+  std::vector<double> stamps;
+  const void* depth_buffer = nullptr;
+  const void* color_buffer = nullptr;
+  for (;;) {
+    const ReadStatus status = source->read(frame);
+    if (status == ReadStatus::kEnd) break;
+    ASSERT_EQ(status, ReadStatus::kFrame);
+    ASSERT_EQ(frame.depth.type(), CV_32FC1);
+    ASSERT_EQ(frame.color.type(), CV_8UC3);
+    ASSERT_EQ(frame.depth.size(), cv::Size(640, 480));
+    ASSERT_EQ(frame.color.size(), cv::Size(640, 480));
+    if (stamps.empty()) {
+      depth_buffer = frame.depth.data;
+      color_buffer = frame.color.data;
+    }
+    // Filled in place: the same buffers every time, no per-frame allocation.
+    EXPECT_EQ(frame.depth.data, depth_buffer);
+    EXPECT_EQ(frame.color.data, color_buffer);
+    EXPECT_EQ(frame.origin, "openni2:" + oniFile());
+    stamps.push_back(frame.timestamp);
+  }
+  ASSERT_EQ(stamps.size(), 12u);
+  EXPECT_EQ(source->read(frame), ReadStatus::kEnd);  // stays ended, no repeat
+  for (std::size_t i = 1; i < stamps.size(); ++i) {
+    // 30 fps device clock, in seconds.
+    EXPECT_NEAR(stamps[i] - stamps[i - 1], 1.0 / 30, 0.003) << i;
+  }
+}
+
+TEST(OpenNI2Source, DepthAndColourMatchOpenNI2ReadFrameOnTheFile) {
+  const DirectFrames direct = readDirectly(oniFile());
+  ASSERT_EQ(direct.depth_mm.size(), 12u);
+  ASSERT_EQ(direct.rgb.size(), 12u);
+  auto source = openOpenNI2Source(oniFile(), kinectConfig());
+  const std::vector<Captured> frames = readAll(*source);
+  ASSERT_EQ(frames.size(), 12u);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    cv::Mat direct_metres;
+    direct.depth_mm[i].convertTo(direct_metres, CV_32F, 0.001);
+    const DepthStats expected = statsOf(direct_metres);
+    const DepthStats got = statsOf(frames[i].depth);
+    EXPECT_DOUBLE_EQ(got.valid_share, expected.valid_share) << i;
+    EXPECT_NEAR(got.min, expected.min, 1e-6) << i;
+    EXPECT_NEAR(got.max, expected.max, 1e-6) << i;
+    EXPECT_NEAR(got.median, expected.median, 1e-6) << i;
+    EXPECT_GT(expected.valid_share, 0.3) << i;  // a real indoor Kinect frame, not an empty one
+    if (i == 0)
+      std::printf("frame 0 depth: %.1f %% valid, min %.3f m, median %.3f m, max %.3f m\n",
+                  100 * got.valid_share, got.min, got.median, got.max);
+    // Bit-identical in millimetres: metres * 1000 gives back OpenNI2's value everywhere.
+    cv::Mat units;
+    frames[i].depth.convertTo(units, CV_16U, 1000.0);
+    EXPECT_EQ(cv::norm(units, direct.depth_mm[i], cv::NORM_INF), 0) << i;
+    // Colour: the same pixels, RGB turned into OpenCV's BGR.
+    std::vector<cv::Mat> bgr;
+    cv::split(frames[i].color, bgr);
+    std::vector<cv::Mat> rgb;
+    cv::split(direct.rgb[i], rgb);
+    EXPECT_EQ(cv::norm(bgr[0], rgb[2], cv::NORM_INF), 0) << i;
+    EXPECT_EQ(cv::norm(bgr[1], rgb[1], cv::NORM_INF), 0) << i;
+    EXPECT_EQ(cv::norm(bgr[2], rgb[0], cv::NORM_INF), 0) << i;
+    EXPECT_DOUBLE_EQ(frames[i].timestamp, direct.color_stamps[i] * 1e-6) << i;
+  }
+}
+
+TEST(OpenNI2Source, ReplayRateOneKeepsTheRecordedTiming) {
+  auto source = openOpenNI2Source(oniFile(), kinectConfig(1.0));
+  const auto start = Clock::now();
+  const std::vector<Captured> frames = readAll(*source);
+  const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  ASSERT_EQ(frames.size(), 12u);  // still lossless
+  const double recorded = frames.back().timestamp - frames.front().timestamp;
+  EXPECT_GE(elapsed, recorded * 0.95);
+  EXPECT_LT(elapsed, recorded + 2.0);
+}
+
+TEST(OpenNI2Source, IntrinsicsFromTheDeviceFieldOfView) {
+  Config config = kinectConfig();
+  config.set("camera.intrinsics", "device", "test");
+  auto source = openOpenNI2Source(oniFile(), config);
+  const CameraIntrinsics camera = source->intrinsics();
+  // The recording stores only the depth stream's field of view (1.014469 x 0.789809 rad).
+  EXPECT_NEAR(camera.fx, 640 / (2 * std::tan(1.014469 / 2)), 0.05);
+  EXPECT_NEAR(camera.fy, 480 / (2 * std::tan(0.789809 / 2)), 0.05);
+  EXPECT_DOUBLE_EQ(camera.cx, 319.5);
+  EXPECT_DOUBLE_EQ(camera.cy, 239.5);
+  EXPECT_FALSE(camera.hasDistortion());
+}
+
+// reconnect() closes everything and opens the same URI again, as after an unplug; on a
+// recording that starts it over.
+TEST(OpenNI2Source, ReconnectReopensTheSameDevice) {
+  auto source = openOpenNI2Source(oniFile(), kinectConfig());
+  Frame frame;
+  std::vector<double> first;
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_EQ(source->read(frame), ReadStatus::kFrame);
+    first.push_back(frame.timestamp);
+  }
+  const void* depth_buffer = frame.depth.data;
+  ASSERT_TRUE(source->reconnect());
+  EXPECT_EQ(source->intrinsics().width, 640);
+  const std::vector<Captured> after = readAll(*source);
+  ASSERT_EQ(after.size(), 12u);
+  EXPECT_DOUBLE_EQ(after[0].timestamp, first[0]);
+  EXPECT_DOUBLE_EQ(after[4].timestamp, first[4]);
+  ASSERT_EQ(source->reconnect(), true);
+  ASSERT_EQ(source->read(frame), ReadStatus::kFrame);
+  EXPECT_EQ(frame.depth.data, depth_buffer);
+}
+
+TEST(OpenNI2Source, ReconnectGivesUpAfterAboutASecondAndSucceedsOnceTheDeviceIsBack) {
+  const std::string dir = test::freshDir();
+  const std::string file = dir + "/camera.oni";
+  const std::string away = dir + "/unplugged.oni";
+  fs::copy_file(oniFile(), file);
+  auto source = openOpenNI2Source(file, kinectConfig());
+  Frame frame;
+  ASSERT_EQ(source->read(frame), ReadStatus::kFrame);
+  fs::rename(file, away);  // the device is gone
+
+  const auto start = Clock::now();
+  EXPECT_FALSE(source->reconnect());
+  const double waited = std::chrono::duration<double>(Clock::now() - start).count();
+  EXPECT_GE(waited, 0.7);
+  EXPECT_LT(waited, 2.5);
+  EXPECT_EQ(source->read(frame), ReadStatus::kTimeout);  // nothing open: still waiting
+  EXPECT_FALSE(source->reconnect());
+
+  fs::rename(away, file);  // plugged back in
+  ASSERT_TRUE(source->reconnect());
+  EXPECT_EQ(source->read(frame), ReadStatus::kFrame);
+  EXPECT_EQ(frame.depth.size(), cv::Size(640, 480));
+}
+
+std::string openError(const std::string& uri, const Config& config) {
+  try {
+    openOpenNI2Source(uri, config);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(OpenNI2Source, BadRecordingsGiveOneClearMessageNamingTheFile) {
+  const std::string dir = test::freshDir();
+  const std::string missing = dir + "/missing.oni";
+  std::string message = openError(missing, kinectConfig());
+  EXPECT_NE(message.find(missing), std::string::npos) << message;
+  EXPECT_NE(message.find("no such"), std::string::npos) << message;
+
+  const std::string garbage = dir + "/garbage.oni";
+  {
+    std::ofstream out(garbage, std::ios::binary);
+    for (int i = 0; i < 4096; ++i) out.put(static_cast<char>((i * 7919) & 0xff));
+  }
+  message = openError(garbage, kinectConfig());
+  EXPECT_NE(message.find(garbage), std::string::npos) << message;
+  EXPECT_NE(message.find("cannot play"), std::string::npos) << message;
+
+  const std::string truncated = dir + "/truncated.oni";
+  {
+    std::ifstream in(oniFile(), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(truncated, std::ios::binary).write(bytes.data(), bytes.size() / 2);
+  }
+  // Either refused at open or played up to where it breaks; never a crash or a hang.
+  message = openError(truncated, kinectConfig());
+  if (message.empty()) {
+    auto source = openOpenNI2Source(truncated, kinectConfig());
+    EXPECT_LT(readAll(*source).size(), 12u);
+  } else {
+    EXPECT_NE(message.find(truncated), std::string::npos) << message;
+  }
+
+  Config small = kinectConfig();
+  small.set("camera.width", "320", "test");
+  small.set("camera.height", "240", "test");
+  message = openError(oniFile(), small);
+  EXPECT_NE(message.find("640x480"), std::string::npos) << message;
+  EXPECT_NE(message.find("320x240"), std::string::npos) << message;
+}
+
+TEST(OpenNI2Source, UnknownDeviceUriIsNamed) {
+  const std::string message = openError("nosuchdriver://1", kinectConfig());
+  EXPECT_NE(message.find("openni2:nosuchdriver://1"), std::string::npos) << message;
+  EXPECT_NE(message.find("cannot open"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace rgbdmap
