@@ -41,6 +41,11 @@ class SignalThread {
     sigset_t set = signals();
     pthread_sigmask(SIG_BLOCK, &set, nullptr);
   }
+  // Subcommands other than mapping keep the default actions (Ctrl-C ends `synth` at once).
+  static void unblockInThisThread() {
+    sigset_t set = signals();
+    pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
+  }
 
  private:
   static sigset_t signals() {
@@ -177,7 +182,9 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   try {
-    return selected ? selected() : runMapping(o);
+    if (!selected) return runMapping(o);
+    SignalThread::unblockInThisThread();
+    return selected();
   } catch (const rgbdmap::InputError& e) {
     spdlog::error("{}", e.what());
     return 2;

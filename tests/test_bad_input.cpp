@@ -174,5 +174,28 @@ TEST(BadInput, UnwritableOutputIsReportedNotCrashed) {
       << output;
 }
 
+TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
+  const std::string dir = test::freshDir();
+  const std::string garbage = dir + "/garbage.pcd";
+  {
+    std::ofstream out(garbage, std::ios::binary);
+    for (int i = 0; i < 3000; ++i) out.put(static_cast<char>((i * 7919 + 13) % 251));
+  }
+  const std::string truncated = dir + "/truncated.pcd";
+  {
+    std::ofstream out(truncated, std::ios::binary);
+    out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100\n"
+           "HEIGHT 1\nPOINTS 100\nDATA binary\nabc";
+  }
+  for (const std::string& path : {garbage, truncated}) {
+    std::string output;
+    const int code = test::run(test::binary() + " render " + path + " --out " + dir + "/x.png", &output);
+    EXPECT_NE(code, 0) << output;
+    EXPECT_LT(code, 128) << "crashed: " << output;
+    EXPECT_NE(output.find(path + ": "), std::string::npos) << output;
+    EXPECT_FALSE(fs::exists(dir + "/x.png"));
+  }
+}
+
 }  // namespace
 }  // namespace rgbdmap

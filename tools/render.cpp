@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdmap/commands.hpp"
+#include "rgbdmap/map_evaluation.hpp"
 #include "rgbdmap/map_renderer.hpp"
 
 namespace rgbdmap {
@@ -107,13 +108,10 @@ cv::Mat MapRenderer::render(const MapCloud& cloud, const Trajectory& trajectory)
 bool renderMapFile(const std::string& map_path, const std::string& trajectory_path,
                    const std::string& png_path, const MapRenderer& renderer, std::string& error) {
   MapCloud cloud;
-  const bool ply = map_path.size() > 4 && map_path.substr(map_path.size() - 4) == ".ply";
-  if (!exists(map_path)) {
-    error = map_path + ": no such file";
-    return false;
-  }
-  if ((ply ? pcl::io::loadPLYFile(map_path, cloud) : pcl::io::loadPCDFile(map_path, cloud)) < 0) {
-    error = map_path + ": cannot read the map";
+  try {
+    cloud = loadMapFile(map_path);  // checks the header first: PCL crashes on some garbage
+  } catch (const std::exception& e) {
+    error = e.what();
     return false;
   }
   Trajectory trajectory;
