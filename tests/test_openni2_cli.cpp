@@ -1,12 +1,19 @@
-// OpenNI2 through the rgbdmap program: mapping the Kinect v1 recording, `record` and replaying
-// what it wrote, `devices` and the no-camera message, and (when the OpenNI2 TUM driver plugin is
-// built) a TUM folder as an OpenNI2 device that unplugs and comes back.
+// OpenNI2 through the rgbdmap program: mapping the Kinect v1 recording,
+// `record` and replaying what it wrote, `devices` and the no-camera message,
+// and (when the OpenNI2 TUM driver plugin is built) a TUM folder as an OpenNI2
+// device that unplugs and comes back.
 
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
@@ -22,12 +29,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string oniFile() { return test::dataDir() + "/oni/kinect_v1_12frames.oni"; }
+std::string oniFile() {
+  return test::dataDir() + "/oni/kinect_v1_12frames.oni";
+}
 const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
 const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
 
 // A counter from `--stats` JSON ("name": value).
-double statValue(const std::string& json, const std::string& name) {
+double statValue(const std::string &json, const std::string &name) {
   const auto at = json.find("\"" + name + "\":");
   if (at == std::string::npos) {
     ADD_FAILURE() << "no " << name << " in " << json;
@@ -36,21 +45,26 @@ double statValue(const std::string& json, const std::string& name) {
   return std::stod(json.substr(at + name.size() + 3));
 }
 
-// Every listed image of a recorded folder exists, decodes, and the two lists pair one to one.
-void expectCompleteRecording(const std::string& dir, std::size_t expected_frames) {
+// Every listed image of a recorded folder exists, decodes, and the two lists
+// pair one to one.
+void expectCompleteRecording(const std::string &dir,
+                             std::size_t expected_frames) {
   const TumSequence sequence(dir);
   EXPECT_EQ(sequence.size(), expected_frames);
   EXPECT_EQ(sequence.unmatchedColor(), 0u);
   EXPECT_EQ(sequence.unmatchedDepth(), 0u);
   EXPECT_FALSE(sequence.hasGroundtruth());
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    const cv::Mat depth = cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED);
-    const cv::Mat color = cv::imread(sequence[i].rgb_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth =
+        cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat color =
+        cv::imread(sequence[i].rgb_path, cv::IMREAD_UNCHANGED);
     ASSERT_EQ(depth.type(), CV_16UC1) << sequence[i].depth_path;
     ASSERT_EQ(color.type(), CV_8UC3) << sequence[i].rgb_path;
   }
-  for (const auto& entry : fs::recursive_directory_iterator(dir))
-    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
+  for (const auto &entry : fs::recursive_directory_iterator(dir))
+    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos)
+        << entry.path();
 }
 
 bool cameraAttached() { return scanUsbCameras().anyCamera(); }
@@ -58,10 +72,11 @@ bool cameraAttached() { return scanUsbCameras().anyCamera(); }
 TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
   const std::string dir = test::freshDir();
   std::string output;
-  const int code = test::run(test::binary() + " --source openni2:" + oniFile() + " --out " + dir +
-                                 "/map.pcd --rate max --set keyframe.every_n=1 --stats " + dir +
-                                 "/stats.json -q",
-                             &output);
+  const int code = test::run(
+      test::binary() + " --source openni2:" + oniFile() + " --out " + dir +
+          "/map.pcd --rate max --set keyframe.every_n=1 --stats " + dir +
+          "/stats.json -q",
+      &output);
   ASSERT_EQ(code, 0) << output;
   const std::string stats = test::readFile(dir + "/stats.json");
   EXPECT_EQ(statValue(stats, "frames_captured"), 12);
@@ -69,7 +84,8 @@ TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
   EXPECT_EQ(statValue(stats, "frames_dropped"), 0);
   EXPECT_EQ(statValue(stats, "frames_skipped"), 0);
   EXPECT_EQ(statValue(stats, "keyframes"), 12);
-  EXPECT_EQ(statValue(stats, "frames_without_pose"), 0);  // odometry, picked automatically
+  EXPECT_EQ(statValue(stats, "frames_without_pose"),
+            0); // odometry, picked automatically
   const MapCloud map = test::loadMap(dir + "/map.pcd");
   EXPECT_GT(map.size(), 50000u);
   EXPECT_EQ(static_cast<double>(map.size()), statValue(stats, "map_points"));
@@ -78,31 +94,35 @@ TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
 }
 
 TEST(OpenNI2Cli, NoCameraGivesAClearErrorNotACrash) {
-  if (cameraAttached()) GTEST_SKIP() << "a camera is attached";
+  if (cameraAttached())
+    GTEST_SKIP() << "a camera is attached";
   std::string output;
-  const int code = test::run(test::binary() + " --source openni2 --out " + test::freshDir() +
-                                 "/map.pcd -q",
+  const int code = test::run(test::binary() + " --source openni2 --out " +
+                                 test::freshDir() + "/map.pcd -q",
                              &output);
-  EXPECT_EQ(code, 2) << output;  // InputError; a crash would be 128 + signal
+  EXPECT_EQ(code, 2) << output; // InputError; a crash would be 128 + signal
   EXPECT_NE(output.find("no camera found"), std::string::npos) << output;
   EXPECT_NE(output.find("USB bus"), std::string::npos) << output;
   EXPECT_NE(output.find("045e:02ae"), std::string::npos) << output;
 }
 
 TEST(OpenNI2Cli, DevicesSaysNoCameraWasFound) {
-  if (cameraAttached()) GTEST_SKIP() << "a camera is attached";
+  if (cameraAttached())
+    GTEST_SKIP() << "a camera is attached";
   std::string output;
   EXPECT_EQ(test::run(test::binary() + " devices", &output), 0) << output;
   EXPECT_NE(output.find("no camera found"), std::string::npos) << output;
   EXPECT_NE(output.find("OpenNI2"), std::string::npos) << output;
-  EXPECT_NE(output.find("udevadm control --reload-rules"), std::string::npos) << output;
+  EXPECT_NE(output.find("udevadm control --reload-rules"), std::string::npos)
+      << output;
   EXPECT_TRUE(fs::exists(udevRulePath())) << udevRulePath();
 }
 
 TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
   const std::string dir = test::freshDir() + "/kinect";
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " record --source openni2:" + oniFile() + " --out " + dir,
+  ASSERT_EQ(test::run(test::binary() + " record --source openni2:" + oniFile() +
+                          " --out " + dir,
                       &output),
             0)
       << output;
@@ -113,7 +133,8 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
   config.loadPreset("kinect_v1");
   config.rate = 0;
   auto original = openSource("openni2:" + oniFile(), config);
-  Config tum_units = config;  // the recorded folder holds TUM depth units, 5000 per metre
+  Config tum_units =
+      config; // the recorded folder holds TUM depth units, 5000 per metre
   tum_units.set("camera.depth_scale", "5000", "test");
   auto replay = openSource("tum:" + dir, tum_units);
   Frame a, b;
@@ -122,11 +143,13 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
     const ReadStatus sa = original->read(a);
     const ReadStatus sb = replay->read(b);
     ASSERT_EQ(sa, sb);
-    if (sa == ReadStatus::kEnd) break;
+    if (sa == ReadStatus::kEnd)
+      break;
     ASSERT_EQ(sa, ReadStatus::kFrame);
     EXPECT_NEAR(a.timestamp, b.timestamp, 5e-7);
-    // Depth: the same measurements in units (1 mm = 5 TUM units), bit for bit, except readings
-    // beyond 13.1 m (this Kinect reports some), which 16-bit TUM units cannot hold: missing.
+    // Depth: the same measurements in units (1 mm = 5 TUM units), bit for bit,
+    // except readings beyond 13.1 m (this Kinect reports some), which 16-bit
+    // TUM units cannot hold: missing.
     cv::Mat mm_a, units_b;
     a.depth.convertTo(mm_a, CV_32S, 1000.0);
     b.depth.convertTo(units_b, CV_32S, 5000.0);
@@ -142,8 +165,8 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
 TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
   const std::string dir = test::freshDir() + "/copy";
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " record --source tum:" + test::tumDir(kXyz) + " --out " +
-                          dir,
+  ASSERT_EQ(test::run(test::binary() + " record --source tum:" +
+                          test::tumDir(kXyz) + " --out " + dir,
                       &output),
             0)
       << output;
@@ -153,36 +176,42 @@ TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
   ASSERT_EQ(copy.size(), original.size());
   for (std::size_t i = 0; i < copy.size(); ++i) {
     EXPECT_NEAR(copy[i].rgb_time, original[i].rgb_time, 5e-7);
-    const cv::Mat depth_a = cv::imread(original[i].depth_path, cv::IMREAD_UNCHANGED);
-    const cv::Mat depth_b = cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_a =
+        cv::imread(original[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_b =
+        cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
     ASSERT_EQ(depth_b.type(), CV_16UC1);
-    EXPECT_EQ(cv::norm(depth_a, depth_b, cv::NORM_INF), 0) << copy[i].depth_path;
+    EXPECT_EQ(cv::norm(depth_a, depth_b, cv::NORM_INF), 0)
+        << copy[i].depth_path;
     const cv::Mat color_a = cv::imread(original[i].rgb_path, cv::IMREAD_COLOR);
     const cv::Mat color_b = cv::imread(copy[i].rgb_path, cv::IMREAD_COLOR);
     EXPECT_EQ(cv::norm(color_a, color_b, cv::NORM_INF), 0) << copy[i].rgb_path;
   }
   // --frames stops early; an existing recording is never overwritten.
   const std::string five = test::freshDir() + "/five";
-  ASSERT_EQ(test::run(test::binary() + " record --source tum:" + test::tumDir(kXyz) + " --out " +
-                          five + " --frames 5",
+  ASSERT_EQ(test::run(test::binary() + " record --source tum:" +
+                          test::tumDir(kXyz) + " --out " + five + " --frames 5",
                       &output),
             0)
       << output;
   expectCompleteRecording(five, 5);
-  EXPECT_EQ(test::run(test::binary() + " record --source tum:" + test::tumDir(kXyz) + " --out " +
-                          five,
+  EXPECT_EQ(test::run(test::binary() + " record --source tum:" +
+                          test::tumDir(kXyz) + " --out " + five,
                       &output),
             2);
-  EXPECT_NE(output.find("already holds a recording"), std::string::npos) << output;
+  EXPECT_NE(output.find("already holds a recording"), std::string::npos)
+      << output;
   expectCompleteRecording(five, 5);
 }
 
 TEST(OpenNI2Cli, RecordStopsCleanlyOnSigintWithCompleteLists) {
   const std::string base = test::freshDir();
   const std::string dir = base + "/interrupted";
-  // At the recorded speed the 100 frames take about 3.3 s; interrupt after about one.
-  test::Process record({test::binary(), "record", "--source", "tum:" + test::tumDir(kRpy),
-                        "--out", dir, "--set", "replay.rate=1"},
+  // At the recorded speed the 100 frames take about 3.3 s; interrupt after
+  // about one.
+  test::Process record({test::binary(), "record", "--source",
+                        "tum:" + test::tumDir(kRpy), "--out", dir, "--set",
+                        "replay.rate=1"},
                        base + "/record.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(1200));
   record.signal(SIGINT);
@@ -195,8 +224,9 @@ TEST(OpenNI2Cli, RecordStopsCleanlyOnSigintWithCompleteLists) {
   expectCompleteRecording(dir, sequence.size());
 }
 
-// The OpenNI2 TUM driver plugin (drivers/openni2_tum) builds a private OpenNI2 runtime beside
-// the binary; through it, a TUM folder is an OpenNI2 device that can be unplugged on request.
+// The OpenNI2 TUM driver plugin (drivers/openni2_tum) builds a private OpenNI2
+// runtime beside the binary; through it, a TUM folder is an OpenNI2 device that
+// can be unplugged on request.
 std::string privateOpenNI2Runtime() {
   const fs::path dir = fs::path(test::binary()).parent_path() / "openni2";
   if (!fs::exists(dir / "libOpenNI2.so.0") ||
@@ -207,30 +237,40 @@ std::string privateOpenNI2Runtime() {
 
 TEST(OpenNI2Cli, RecordsATumDeviceAcrossAnUnplugBitIdentically) {
   const std::string runtime = privateOpenNI2Runtime();
-  if (runtime.empty()) GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  if (runtime.empty())
+    GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
   const std::string dir = test::freshDir() + "/through_openni2";
-  const std::string uri = "tum:" + test::tumDir(kXyz) + "?disconnect_after=10&reconnect_after_ms=400";
+  const std::string uri = "tum:" + test::tumDir(kXyz) +
+                          "?disconnect_after=10&reconnect_after_ms=400";
   std::string output;
   ASSERT_EQ(test::run("LD_LIBRARY_PATH=" + runtime + " " + test::binary() +
-                          " record --source 'openni2:" + uri + "' --out " + dir + " --frames 20",
+                          " record --source 'openni2:" + uri + "' --out " +
+                          dir + " --frames 20",
                       &output),
             0)
       << output;
-  EXPECT_NE(output.find("reopened"), std::string::npos) << output;  // it did unplug and return
+  EXPECT_NE(output.find("reopened"), std::string::npos)
+      << output; // it did unplug and return
   expectCompleteRecording(dir, 20);
-  // Each recorded frame is the folder's pair with the same stamp, bit for bit (depth through
-  // DEPTH_100_UM and back to TUM units). A live device may overwrite a frame the recorder was too
-  // slow for, so pairs are matched by stamp rather than by position.
+  // Each recorded frame is the folder's pair with the same stamp, bit for bit
+  // (depth through DEPTH_100_UM and back to TUM units). A live device may
+  // overwrite a frame the recorder was too slow for, so pairs are matched by
+  // stamp rather than by position.
   const TumSequence original(test::tumDir(kXyz));
   const TumSequence copy(dir);
   ASSERT_EQ(copy.size(), 20u);
   std::size_t j = 0;
   for (std::size_t i = 0; i < copy.size(); ++i) {
-    while (j < original.size() && original[j].rgb_time < copy[i].rgb_time - 5e-7) ++j;
-    ASSERT_LT(j, original.size()) << "no original frame at " << copy[i].rgb_time;
+    while (j < original.size() &&
+           original[j].rgb_time < copy[i].rgb_time - 5e-7)
+      ++j;
+    ASSERT_LT(j, original.size())
+        << "no original frame at " << copy[i].rgb_time;
     EXPECT_NEAR(copy[i].rgb_time, original[j].rgb_time, 5e-7) << i;
-    const cv::Mat depth_a = cv::imread(original[j].depth_path, cv::IMREAD_UNCHANGED);
-    const cv::Mat depth_b = cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_a =
+        cv::imread(original[j].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_b =
+        cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
     EXPECT_EQ(cv::norm(depth_a, depth_b, cv::NORM_INF), 0) << i;
     const cv::Mat color_a = cv::imread(original[j].rgb_path, cv::IMREAD_COLOR);
     const cv::Mat color_b = cv::imread(copy[i].rgb_path, cv::IMREAD_COLOR);
@@ -241,13 +281,17 @@ TEST(OpenNI2Cli, RecordsATumDeviceAcrossAnUnplugBitIdentically) {
 
 TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   const std::string runtime = privateOpenNI2Runtime();
-  if (runtime.empty()) GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  if (runtime.empty())
+    GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
   const std::string dir = test::freshDir();
-  const std::string uri = "tum:" + test::tumDir(kXyz) + "?disconnect_after=12&reconnect_after_ms=400";
-  // A live device never ends by itself: stop it with SIGINT once the folder has played.
+  const std::string uri = "tum:" + test::tumDir(kXyz) +
+                          "?disconnect_after=12&reconnect_after_ms=400";
+  // A live device never ends by itself: stop it with SIGINT once the folder has
+  // played.
   setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
-  test::Process map({test::binary(), "--source", "openni2:" + uri, "--out", dir + "/map.pcd",
-                     "--stats", dir + "/stats.json", "--no-render", "-q"},
+  test::Process map({test::binary(), "--source", "openni2:" + uri, "--out",
+                     dir + "/map.pcd", "--stats", dir + "/stats.json",
+                     "--no-render", "-q"},
                     dir + "/map.log");
   unsetenv("LD_LIBRARY_PATH");
   std::this_thread::sleep_for(std::chrono::seconds(6));
@@ -257,17 +301,124 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   ASSERT_EQ(code, 0) << log;
   const std::string stats = test::readFile(dir + "/stats.json");
   EXPECT_GE(statValue(stats, "disconnects"), 1) << log;
-  // A live device keeps its own pace: a frame may be lost while the streams restart, so the count
-  // is bounded rather than exact; more than 12 means capture resumed after the unplug.
+  // A live device keeps its own pace: a frame may be lost while the streams
+  // restart, so the count is bounded rather than exact; more than 12 means
+  // capture resumed after the unplug.
   const double captured = statValue(stats, "frames_captured");
   EXPECT_GT(captured, 12) << log;
   EXPECT_GE(captured, TumSequence(test::tumDir(kXyz)).size() - 4.0) << log;
   EXPECT_LE(captured, TumSequence(test::tumDir(kXyz)).size()) << log;
-  // Keyframes every 10th frame: the third one comes after the unplug, so mapping resumed.
+  // Keyframes every 10th frame: the third one comes after the unplug, so
+  // mapping resumed.
   EXPECT_GE(statValue(stats, "keyframes"), 3) << log;
   EXPECT_GT(test::loadMap(dir + "/map.pcd").size(), 10000u);
   EXPECT_NE(log.find("camera is back"), std::string::npos) << log;
 }
 
-}  // namespace
-}  // namespace rgbdmap
+// A TUM folder through the OpenNI2 driver plugin maps exactly like the folder
+// read directly. The device plays at its own pace, so the frames it mapped (its
+// keyframe list, every frame a keyframe) are mapped again straight from a copy
+// of the folder that lists only those frames; poses come from the same ground
+// truth file in both runs.
+TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
+  const std::string runtime = privateOpenNI2Runtime();
+  if (runtime.empty())
+    GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  const std::string dir = test::freshDir();
+  const std::string folder = test::tumDir(kXyz);
+  const std::vector<std::string> common = {
+      "--config",    "tum_fr1",
+      "--set",       "pose.source=trajectory",
+      "--set",       "pose.trajectory=" + folder + "/groundtruth.txt",
+      "--set",       "keyframe.every_n=1",
+      "--no-render", "-q"};
+
+  std::vector<std::string> live = {test::binary(), "--source",
+                                   "openni2:tum:" + folder, "--out",
+                                   dir + "/device.pcd"};
+  live.insert(live.end(), common.begin(), common.end());
+  setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
+  test::Process device_run(live, dir + "/device.log");
+  unsetenv("LD_LIBRARY_PATH");
+  std::this_thread::sleep_for(
+      std::chrono::seconds(5)); // the folder plays in ~1.1 s
+  device_run.signal(SIGINT);
+  ASSERT_EQ(device_run.wait(120), 0) << test::readFile(dir + "/device.log");
+
+  // The frames the device run mapped, by colour stamp.
+  std::vector<double> mapped;
+  {
+    std::ifstream keyframes(dir + "/device_keyframes.txt");
+    std::string line;
+    while (std::getline(keyframes, line))
+      if (!line.empty() && line[0] != '#')
+        mapped.push_back(std::stod(line));
+  }
+  const TumSequence sequence(folder);
+  ASSERT_GE(mapped.size(), sequence.size() / 2)
+      << test::readFile(dir + "/device.log");
+  const std::string copy = test::copySequence(folder, dir + "/selected");
+  {
+    std::ofstream rgb(copy + "/rgb.txt"), depth(copy + "/depth.txt");
+    rgb << std::fixed << std::setprecision(6);
+    depth << std::fixed << std::setprecision(6);
+    std::size_t listed = 0;
+    for (std::size_t i = 0; i < sequence.size(); ++i) {
+      const bool used =
+          std::any_of(mapped.begin(), mapped.end(), [&](double stamp) {
+            return std::abs(stamp - sequence[i].rgb_time) < 1e-5;
+          });
+      if (!used)
+        continue;
+      ++listed;
+      rgb << sequence[i].rgb_time << " rgb/"
+          << fs::path(sequence[i].rgb_path).filename().string() << "\n";
+      depth << sequence[i].depth_time << " depth/"
+            << fs::path(sequence[i].depth_path).filename().string() << "\n";
+    }
+    ASSERT_EQ(listed, mapped.size())
+        << "a device stamp that is not a frame of the folder";
+  }
+  std::vector<std::string> direct = {
+      test::binary(), "--source", "tum:" + copy,      "--rate",
+      "max",          "--out",    dir + "/direct.pcd"};
+  direct.insert(direct.end(), common.begin(), common.end());
+  test::Process direct_run(direct, dir + "/direct.log");
+  ASSERT_EQ(direct_run.wait(120), 0) << test::readFile(dir + "/direct.log");
+
+  // The same map: the same voxels with the same points, up to float rounding of
+  // the stamps (microseconds from the device) and of depth (0.1 mm units
+  // instead of TUM's 0.2 mm).
+  const MapCloud a = test::loadMap(dir + "/device.pcd");
+  const MapCloud b = test::loadMap(dir + "/direct.pcd");
+  ASSERT_GT(a.size(), 50000u);
+  EXPECT_NEAR(static_cast<double>(a.size()), static_cast<double>(b.size()),
+              1e-4 * b.size());
+  // One point per 1 cm voxel: pair the points by voxel.
+  auto voxel = [](const pcl::PointXYZRGB &p) {
+    return std::array<long, 3>{std::lround(std::floor(p.x / 0.01f)),
+                               std::lround(std::floor(p.y / 0.01f)),
+                               std::lround(std::floor(p.z / 0.01f))};
+  };
+  std::map<std::array<long, 3>, pcl::PointXYZRGB> by_voxel;
+  for (const auto &p : a.points)
+    by_voxel.emplace(voxel(p), p);
+  std::size_t same = 0;
+  for (const auto &q : b.points) {
+    const auto found = by_voxel.find(voxel(q));
+    if (found == by_voxel.end())
+      continue;
+    const pcl::PointXYZRGB &p = found->second;
+    same += (p.getVector3fMap() - q.getVector3fMap()).cwiseAbs().maxCoeff() <
+                1e-4f &&
+            std::abs(int(p.r) - int(q.r)) <= 1 &&
+            std::abs(int(p.g) - int(q.g)) <= 1 &&
+            std::abs(int(p.b) - int(q.b)) <= 1;
+  }
+  EXPECT_GE(same,
+            static_cast<std::size_t>(0.999 * static_cast<double>(b.size())))
+      << same << " of " << b.size() << " points agree";
+}
+
+} // namespace
+} // namespace rgbdmap
