@@ -19,8 +19,7 @@ namespace {
 std::string stem(const std::string &path) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
-  return (dot == std::string::npos ||
-          (slash != std::string::npos && dot < slash))
+  return (dot == std::string::npos || (slash != std::string::npos && dot < slash))
              ? path
              : path.substr(0, dot);
 }
@@ -30,7 +29,7 @@ std::string stem(const std::string &path) {
 // A second SIGINT: quit at once, removing the temporary file of a write in
 // progress (the destination is never half-written).
 class SignalThread {
-public:
+ public:
   SignalThread(rgbdmap::RunControl &control, std::string map_path)
       : control_(control), map_path_(std::move(map_path)) {
     thread_ = std::thread([this] { run(); });
@@ -50,7 +49,7 @@ public:
     pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
   }
 
-private:
+ private:
   static sigset_t signals() {
     sigset_t set;
     sigemptyset(&set);
@@ -69,10 +68,8 @@ private:
         control_.snapshot.store(true);
       } else if (sig == SIGINT || sig == SIGTERM) {
         if (control_.stop.exchange(true) && sig == SIGINT) {
-          std::remove(
-              (map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
-          std::fputs("\nsecond interrupt: quitting without the final save\n",
-                     stderr);
+          std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
+          std::fputs("\nsecond interrupt: quitting without the final save\n", stderr);
           std::_Exit(130);
         }
         spdlog::info("{}: stopping (interrupt again to quit without saving)",
@@ -104,42 +101,37 @@ int runMapping(const MapOptions &o) {
   Config config;
   if (o.list_keys) {
     for (const Config::Key &k : config.keys())
-      std::printf("%-28s %-12s %s\n", k.name.c_str(), k.get().c_str(),
-                  k.help.c_str());
+      std::printf("%-28s %-12s %s\n", k.name.c_str(), k.get().c_str(), k.help.c_str());
     return 0;
   }
   if (o.source.empty()) {
-    spdlog::error("no --source given (tum:DIR, openni2, openni2:URI or "
-                  "openni2:FILE.oni); "
-                  "`rgbdmap synth --out DIR` makes a sequence to try");
+    spdlog::error(
+        "no --source given (tum:DIR, openni2, openni2:URI or "
+        "openni2:FILE.oni); "
+        "`rgbdmap synth --out DIR` makes a sequence to try");
     return 2;
   }
-  config.loadPreset(o.config_file.empty() ? presetForSource(o.source)
-                                          : o.config_file);
-  if (!o.rate.empty())
-    config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
+  config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
+  if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string &s : o.sets) {
     const auto eq = s.find('=');
-    if (eq == std::string::npos)
-      throw InputError("--set " + s + ": expected key=value");
+    if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
   }
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (config.pose_source == "auto")
     config.pose_source = source->providesPoses() ? "groundtruth" : "odometry";
   if (config.pose_source == "groundtruth" && !source->providesPoses())
-    throw InputError(
-        source->describe() +
-        ": has no ground truth poses; use --set pose.source=odometry "
-        "or pose.source=trajectory");
+    throw InputError(source->describe() +
+                     ": has no ground truth poses; use --set pose.source=odometry "
+                     "or pose.source=trajectory");
 
   PipelineOutputs outputs;
   outputs.map_path = o.out;
   outputs.trajectory_path = stem(o.out) + "_keyframes.txt";
   outputs.config_path = stem(o.out) + ".yaml";
   outputs.status_line = !o.quiet;
-  spdlog::info("configuration (preset {}):\n{}", config.preset,
-               config.toYaml());
+  spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
   RunControl control;
   int code = 0;
@@ -150,14 +142,12 @@ int runMapping(const MapOptions &o) {
     if (!o.stats_file.empty()) {
       std::ofstream stats(o.stats_file);
       stats << pipeline.stats().toJson();
-      if (!stats)
-        spdlog::error("{}: cannot write statistics", o.stats_file);
+      if (!stats) spdlog::error("{}: cannot write statistics", o.stats_file);
     }
   }
   if (!o.no_render) {
     std::string error;
-    if (renderMapFile(o.out, stem(o.out) + "_keyframes.txt",
-                      stem(o.out) + ".png", {}, error))
+    if (renderMapFile(o.out, stem(o.out) + "_keyframes.txt", stem(o.out) + ".png", {}, error))
       spdlog::info("picture of the map: {}", stem(o.out) + ".png");
     else
       spdlog::warn("no picture of the map: {}", error);
@@ -165,35 +155,26 @@ int runMapping(const MapOptions &o) {
   return code;
 }
 
-} // namespace
+}  // namespace
 
 int main(int argc, char **argv) {
-  SignalThread::blockInThisThread(); // before any thread exists, so all inherit
-                                     // the mask
-  CLI::App app{
-      "rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};
+  SignalThread::blockInThisThread();  // before any thread exists, so all inherit
+                                      // the mask
+  CLI::App app{"rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};
   app.set_version_flag("--version", RGBDMAP_VERSION);
   MapOptions o;
-  app.add_option(
-      "-c,--config", o.config_file,
-      "YAML config: a preset name (tum_fr1, kinect_v1, ...) or a file");
-  app.add_option("-s,--source", o.source,
-                 "tum:DIR | openni2 | openni2:URI | openni2:FILE.oni");
-  app.add_option("-o,--out", o.out,
-                 "map file (PCD); checkpoints overwrite it atomically")
+  app.add_option("-c,--config", o.config_file,
+                 "YAML config: a preset name (tum_fr1, kinect_v1, ...) or a file");
+  app.add_option("-s,--source", o.source, "tum:DIR | openni2 | openni2:URI | openni2:FILE.oni");
+  app.add_option("-o,--out", o.out, "map file (PCD); checkpoints overwrite it atomically")
       ->capture_default_str();
-  app.add_option(
-      "-r,--rate", o.rate,
-      "replay speed: 1 = as recorded, max = as fast as possible (lossless)");
-  app.add_option(
-      "--set", o.sets,
-      "override a config key: --set map.voxel_size=0.005 (repeatable)");
-  app.add_option("--stats", o.stats_file,
-                 "write counters and per-stage latency as JSON at exit");
+  app.add_option("-r,--rate", o.rate,
+                 "replay speed: 1 = as recorded, max = as fast as possible (lossless)");
+  app.add_option("--set", o.sets, "override a config key: --set map.voxel_size=0.005 (repeatable)");
+  app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
   app.add_flag("--no-render", o.no_render, "do not write a picture of the map");
   app.add_flag("-q,--quiet", o.quiet, "no status line");
-  app.add_flag("--list-keys", o.list_keys,
-               "list every config key with its default and meaning");
+  app.add_flag("--list-keys", o.list_keys, "list every config key with its default and meaning");
 
   rgbdmap::Command selected;
   rgbdmap::addRenderCommand(app, selected);
@@ -210,8 +191,7 @@ int main(int argc, char **argv) {
     return app.exit(e);
   }
   try {
-    if (!selected)
-      return runMapping(o);
+    if (!selected) return runMapping(o);
     SignalThread::unblockInThisThread();
     return selected();
   } catch (const rgbdmap::InputError &e) {

@@ -21,41 +21,33 @@ struct Outcome {
   std::string output;
 };
 
-Outcome map(const std::string &folder, const std::string &out_dir,
-            const std::string &extra = "") {
+Outcome map(const std::string &folder, const std::string &out_dir, const std::string &extra = "") {
   Outcome o;
-  o.exit_code =
-      test::run(test::binary() + " --source tum:" + folder + " --out " +
-                    out_dir + "/map.pcd --rate max -q --no-render --stats " +
-                    out_dir + "/stats.json " + extra,
-                &o.output);
+  o.exit_code = test::run(test::binary() + " --source tum:" + folder + " --out " + out_dir +
+                              "/map.pcd --rate max -q --no-render --stats " + out_dir +
+                              "/stats.json " + extra,
+                          &o.output);
   return o;
 }
 
 // Replaces line `number` (1-based) of a text file.
-void replaceLine(const std::string &path, std::size_t number,
-                 const std::string &text) {
+void replaceLine(const std::string &path, std::size_t number, const std::string &text) {
   std::ifstream in(path);
   std::vector<std::string> lines;
-  for (std::string l; std::getline(in, l);)
-    lines.push_back(l);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
   ASSERT_LE(number, lines.size());
   lines[number - 1] = text;
   std::ofstream out(path);
-  for (const auto &l : lines)
-    out << l << "\n";
+  for (const auto &l : lines) out << l << "\n";
 }
 
-std::string statsOf(const std::string &dir) {
-  return test::readFile(dir + "/stats.json");
-}
+std::string statsOf(const std::string &dir) { return test::readFile(dir + "/stats.json"); }
 
 TEST(BadInput, MissingFolder) {
   const std::string dir = test::freshDir();
   const Outcome o = map(dir + "/nowhere", dir);
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find(dir + "/nowhere: no such folder"), std::string::npos)
-      << o.output;
+  EXPECT_NE(o.output.find(dir + "/nowhere: no such folder"), std::string::npos) << o.output;
 }
 
 TEST(BadInput, MissingListFile) {
@@ -64,40 +56,33 @@ TEST(BadInput, MissingListFile) {
   fs::remove(seq + "/depth.txt");
   const Outcome o = map(seq, dir);
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find(seq + "/depth.txt: missing"), std::string::npos)
-      << o.output;
+  EXPECT_NE(o.output.find(seq + "/depth.txt: missing"), std::string::npos) << o.output;
 }
 
 TEST(BadInput, MalformedListLine) {
   const std::string dir = test::freshDir();
   const std::string seq = test::copySequence(test::tumDir(kXyz), dir + "/seq");
-  replaceLine(seq + "/rgb.txt", 7,
-              "1305031102.2753x6 rgb/1305031102.275326.png");
+  replaceLine(seq + "/rgb.txt", 7, "1305031102.2753x6 rgb/1305031102.275326.png");
   Outcome o = map(seq, dir);
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(
-      o.output.find(
-          seq + "/rgb.txt:7: timestamp '1305031102.2753x6' is not a number"),
-      std::string::npos)
+  EXPECT_NE(o.output.find(seq + "/rgb.txt:7: timestamp '1305031102.2753x6' is not a number"),
+            std::string::npos)
       << o.output;
 
   replaceLine(seq + "/rgb.txt", 7, "1305031102.275326");
   o = map(seq, dir);
   EXPECT_EQ(o.exit_code, 2);
-  EXPECT_NE(o.output.find(seq + "/rgb.txt:7: expected 'timestamp filename'"),
-            std::string::npos)
+  EXPECT_NE(o.output.find(seq + "/rgb.txt:7: expected 'timestamp filename'"), std::string::npos)
       << o.output;
 }
 
 TEST(BadInput, TimestampsOutOfOrder) {
   const std::string dir = test::freshDir();
   const std::string seq = test::copySequence(test::tumDir(kXyz), dir + "/seq");
-  replaceLine(seq + "/depth.txt", 8,
-              "1305031102.100000 depth/1305031102.295279.png");
+  replaceLine(seq + "/depth.txt", 8, "1305031102.100000 depth/1305031102.295279.png");
   const Outcome o = map(seq, dir);
   EXPECT_EQ(o.exit_code, 2);
-  EXPECT_NE(o.output.find(
-                seq + "/depth.txt:8: timestamp 1305031102.100000 is not after"),
+  EXPECT_NE(o.output.find(seq + "/depth.txt:8: timestamp 1305031102.100000 is not after"),
             std::string::npos)
       << o.output;
 }
@@ -105,29 +90,25 @@ TEST(BadInput, TimestampsOutOfOrder) {
 TEST(BadInput, NanOrNonUnitPose) {
   const std::string dir = test::freshDir();
   const std::string seq = test::copySequence(test::tumDir(kXyz), dir + "/seq");
-  replaceLine(
-      seq + "/groundtruth.txt", 355,
-      "1305031102.1758 1.3405 nan 1.6575 0.6574 0.6126 -0.2949 -0.3248");
+  replaceLine(seq + "/groundtruth.txt", 355,
+              "1305031102.1758 1.3405 nan 1.6575 0.6574 0.6126 -0.2949 -0.3248");
   Outcome o = map(seq, dir);
   EXPECT_EQ(o.exit_code, 2);
-  EXPECT_NE(o.output.find(seq + "/groundtruth.txt:355: ty is nan (not finite)"),
-            std::string::npos)
+  EXPECT_NE(o.output.find(seq + "/groundtruth.txt:355: ty is nan (not finite)"), std::string::npos)
       << o.output;
 
-  replaceLine(
-      seq + "/groundtruth.txt", 355,
-      "1305031102.1758 1.3405 0.6266 1.6575 0.9 0.6126 -0.2949 -0.3248");
+  replaceLine(seq + "/groundtruth.txt", 355,
+              "1305031102.1758 1.3405 0.6266 1.6575 0.9 0.6126 -0.2949 -0.3248");
   o = map(seq, dir);
   EXPECT_EQ(o.exit_code, 2);
-  EXPECT_NE(o.output.find(seq + "/groundtruth.txt:355: quaternion norm"),
-            std::string::npos)
+  EXPECT_NE(o.output.find(seq + "/groundtruth.txt:355: quaternion norm"), std::string::npos)
       << o.output;
 }
 
 // Image problems skip the one frame (counted) and the rest of the sequence is
 // still mapped.
 class BadImage : public ::testing::Test {
-protected:
+ protected:
   void SetUp() override {
     dir_ = test::freshDir();
     seq_ = dir_ + "/seq";
@@ -143,22 +124,19 @@ protected:
     EXPECT_NE(o.output.find(what), std::string::npos) << o.output;
     const std::string stats = statsOf(dir_);
     EXPECT_NE(stats.find("\"frames_skipped\": 1,"), std::string::npos) << stats;
-    EXPECT_NE(stats.find("\"frames_captured\": 31,"), std::string::npos)
-        << stats;
+    EXPECT_NE(stats.find("\"frames_captured\": 31,"), std::string::npos) << stats;
     EXPECT_GT(test::loadMap(dir_ + "/map.pcd").size(), 10000u);
   }
   std::string dir_, seq_;
 };
 
 TEST_F(BadImage, ListedImageDoesNotExist) {
-  fs::remove(seq_ + "/rgb/1305031102.311267.png"); // rgb.txt line 8
-  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ +
-                   "/rgb/1305031102.311267.png: cannot open image");
+  fs::remove(seq_ + "/rgb/1305031102.311267.png");  // rgb.txt line 8
+  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ + "/rgb/1305031102.311267.png: cannot open image");
 }
 
 TEST_F(BadImage, TruncatedPng) {
-  const std::string path =
-      seq_ + "/depth/1305031102.295279.png"; // depth.txt line 8
+  const std::string path = seq_ + "/depth/1305031102.295279.png";  // depth.txt line 8
   fs::resize_file(path, fs::file_size(path) / 3);
   expectOneSkipped(seq_ + "/depth.txt:8: " + path + ": cannot decode image");
 }
@@ -167,20 +145,17 @@ TEST_F(BadImage, DepthOfTheWrongSize) {
   const std::string path = seq_ + "/depth/1305031102.295279.png";
   cv::Mat small(240, 320, CV_16UC1, cv::Scalar(5000));
   ASSERT_TRUE(cv::imwrite(path, small));
-  expectOneSkipped(seq_ + "/depth.txt:8: " + path +
-                   ": depth is 320x240 but colour");
+  expectOneSkipped(seq_ + "/depth.txt:8: " + path + ": depth is 320x240 but colour");
 }
 
 TEST_F(BadImage, NotAnImageAtAll) {
   // Must not silently reuse the previous frame's colour.
   std::ofstream(seq_ + "/rgb/1305031102.311267.png") << "this is not a picture";
-  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ +
-                   "/rgb/1305031102.311267.png: not a PNG image");
+  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ + "/rgb/1305031102.311267.png: not a PNG image");
 }
 
 TEST_F(BadImage, ColourWhereDepthShouldBe) {
-  fs::copy_file(seq_ + "/rgb/1305031102.311267.png",
-                seq_ + "/depth/1305031102.295279.png",
+  fs::copy_file(seq_ + "/rgb/1305031102.311267.png", seq_ + "/depth/1305031102.295279.png",
                 fs::copy_options::overwrite_existing);
   expectOneSkipped("depth must be a 16-bit single-channel PNG");
 }
@@ -189,26 +164,22 @@ TEST(BadInput, UnknownConfigKeyAndBadRate) {
   const std::string dir = test::freshDir();
   Outcome o = map(test::tumDir(kXyz), dir, "--set map.voxelsize=0.01");
   EXPECT_EQ(o.exit_code, 2);
-  EXPECT_NE(o.output.find("unknown config key 'map.voxelsize'"),
-            std::string::npos)
-      << o.output;
-  o.exit_code =
-      test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) +
-                    " --out " + dir + "/map.pcd --rate fast -q",
-                &o.output);
+  EXPECT_NE(o.output.find("unknown config key 'map.voxelsize'"), std::string::npos) << o.output;
+  o.exit_code = test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
+                              "/map.pcd --rate fast -q",
+                          &o.output);
   EXPECT_EQ(o.exit_code, 2);
-  EXPECT_NE(o.output.find("--rate: replay.rate: 'fast' is not a number"),
-            std::string::npos)
+  EXPECT_NE(o.output.find("--rate: replay.rate: 'fast' is not a number"), std::string::npos)
       << o.output;
   EXPECT_FALSE(fs::exists(dir + "/map.pcd"));
 }
 
 TEST(BadInput, UnwritableOutputIsReportedNotCrashed) {
   std::string output;
-  const int code = test::run(
-      test::binary() + " --source tum:" + test::tumDir(kXyz) +
-          " --out /proc/rgbdmap-no-such-dir/map.pcd --rate max -q --no-render",
-      &output);
+  const int code =
+      test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) +
+                    " --out /proc/rgbdmap-no-such-dir/map.pcd --rate max -q --no-render",
+                &output);
   EXPECT_EQ(code, 1) << output;
   EXPECT_NE(output.find("final map not saved: "
                         "/proc/rgbdmap-no-such-dir/map.pcd: cannot write map"),
@@ -221,8 +192,7 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
   const std::string garbage = dir + "/garbage.pcd";
   {
     std::ofstream out(garbage, std::ios::binary);
-    for (int i = 0; i < 3000; ++i)
-      out.put(static_cast<char>((i * 7919 + 13) % 251));
+    for (int i = 0; i < 3000; ++i) out.put(static_cast<char>((i * 7919 + 13) % 251));
   }
   const std::string truncated = dir + "/truncated.pcd";
   {
@@ -233,9 +203,8 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
   }
   for (const std::string &path : {garbage, truncated}) {
     std::string output;
-    const int code = test::run(test::binary() + " render " + path + " --out " +
-                                   dir + "/x.png",
-                               &output);
+    const int code =
+        test::run(test::binary() + " render " + path + " --out " + dir + "/x.png", &output);
     EXPECT_NE(code, 0) << output;
     EXPECT_LT(code, 128) << "crashed: " << output;
     EXPECT_NE(output.find(path + ": "), std::string::npos) << output;
@@ -243,5 +212,5 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
   }
 }
 
-} // namespace
-} // namespace rgbdmap
+}  // namespace
+}  // namespace rgbdmap

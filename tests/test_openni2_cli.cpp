@@ -29,9 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string oniFile() {
-  return test::dataDir() + "/oni/kinect_v1_12frames.oni";
-}
+std::string oniFile() { return test::dataDir() + "/oni/kinect_v1_12frames.oni"; }
 const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
 const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
 
@@ -47,24 +45,20 @@ double statValue(const std::string &json, const std::string &name) {
 
 // Every listed image of a recorded folder exists, decodes, and the two lists
 // pair one to one.
-void expectCompleteRecording(const std::string &dir,
-                             std::size_t expected_frames) {
+void expectCompleteRecording(const std::string &dir, std::size_t expected_frames) {
   const TumSequence sequence(dir);
   EXPECT_EQ(sequence.size(), expected_frames);
   EXPECT_EQ(sequence.unmatchedColor(), 0u);
   EXPECT_EQ(sequence.unmatchedDepth(), 0u);
   EXPECT_FALSE(sequence.hasGroundtruth());
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    const cv::Mat depth =
-        cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED);
-    const cv::Mat color =
-        cv::imread(sequence[i].rgb_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth = cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat color = cv::imread(sequence[i].rgb_path, cv::IMREAD_UNCHANGED);
     ASSERT_EQ(depth.type(), CV_16UC1) << sequence[i].depth_path;
     ASSERT_EQ(color.type(), CV_8UC3) << sequence[i].rgb_path;
   }
   for (const auto &entry : fs::recursive_directory_iterator(dir))
-    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos)
-        << entry.path();
+    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
 }
 
 bool cameraAttached() { return scanUsbCameras().anyCamera(); }
@@ -72,11 +66,10 @@ bool cameraAttached() { return scanUsbCameras().anyCamera(); }
 TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
   const std::string dir = test::freshDir();
   std::string output;
-  const int code = test::run(
-      test::binary() + " --source openni2:" + oniFile() + " --out " + dir +
-          "/map.pcd --rate max --set keyframe.every_n=1 --stats " + dir +
-          "/stats.json -q",
-      &output);
+  const int code = test::run(test::binary() + " --source openni2:" + oniFile() + " --out " + dir +
+                                 "/map.pcd --rate max --set keyframe.every_n=1 --stats " + dir +
+                                 "/stats.json -q",
+                             &output);
   ASSERT_EQ(code, 0) << output;
   const std::string stats = test::readFile(dir + "/stats.json");
   EXPECT_EQ(statValue(stats, "frames_captured"), 12);
@@ -85,7 +78,7 @@ TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
   EXPECT_EQ(statValue(stats, "frames_skipped"), 0);
   EXPECT_EQ(statValue(stats, "keyframes"), 12);
   EXPECT_EQ(statValue(stats, "frames_without_pose"),
-            0); // odometry, picked automatically
+            0);  // odometry, picked automatically
   const MapCloud map = test::loadMap(dir + "/map.pcd");
   EXPECT_GT(map.size(), 50000u);
   EXPECT_EQ(static_cast<double>(map.size()), statValue(stats, "map_points"));
@@ -94,35 +87,30 @@ TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
 }
 
 TEST(OpenNI2Cli, NoCameraGivesAClearErrorNotACrash) {
-  if (cameraAttached())
-    GTEST_SKIP() << "a camera is attached";
+  if (cameraAttached()) GTEST_SKIP() << "a camera is attached";
   std::string output;
-  const int code = test::run(test::binary() + " --source openni2 --out " +
-                                 test::freshDir() + "/map.pcd -q",
-                             &output);
-  EXPECT_EQ(code, 2) << output; // InputError; a crash would be 128 + signal
+  const int code = test::run(
+      test::binary() + " --source openni2 --out " + test::freshDir() + "/map.pcd -q", &output);
+  EXPECT_EQ(code, 2) << output;  // InputError; a crash would be 128 + signal
   EXPECT_NE(output.find("no camera found"), std::string::npos) << output;
   EXPECT_NE(output.find("USB bus"), std::string::npos) << output;
   EXPECT_NE(output.find("045e:02ae"), std::string::npos) << output;
 }
 
 TEST(OpenNI2Cli, DevicesSaysNoCameraWasFound) {
-  if (cameraAttached())
-    GTEST_SKIP() << "a camera is attached";
+  if (cameraAttached()) GTEST_SKIP() << "a camera is attached";
   std::string output;
   EXPECT_EQ(test::run(test::binary() + " devices", &output), 0) << output;
   EXPECT_NE(output.find("no camera found"), std::string::npos) << output;
   EXPECT_NE(output.find("OpenNI2"), std::string::npos) << output;
-  EXPECT_NE(output.find("udevadm control --reload-rules"), std::string::npos)
-      << output;
+  EXPECT_NE(output.find("udevadm control --reload-rules"), std::string::npos) << output;
   EXPECT_TRUE(fs::exists(udevRulePath())) << udevRulePath();
 }
 
 TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
   const std::string dir = test::freshDir() + "/kinect";
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " record --source openni2:" + oniFile() +
-                          " --out " + dir,
+  ASSERT_EQ(test::run(test::binary() + " record --source openni2:" + oniFile() + " --out " + dir,
                       &output),
             0)
       << output;
@@ -133,8 +121,7 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
   config.loadPreset("kinect_v1");
   config.rate = 0;
   auto original = openSource("openni2:" + oniFile(), config);
-  Config tum_units =
-      config; // the recorded folder holds TUM depth units, 5000 per metre
+  Config tum_units = config;  // the recorded folder holds TUM depth units, 5000 per metre
   tum_units.set("camera.depth_scale", "5000", "test");
   auto replay = openSource("tum:" + dir, tum_units);
   Frame a, b;
@@ -143,8 +130,7 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
     const ReadStatus sa = original->read(a);
     const ReadStatus sb = replay->read(b);
     ASSERT_EQ(sa, sb);
-    if (sa == ReadStatus::kEnd)
-      break;
+    if (sa == ReadStatus::kEnd) break;
     ASSERT_EQ(sa, ReadStatus::kFrame);
     EXPECT_NEAR(a.timestamp, b.timestamp, 5e-7);
     // Depth: the same measurements in units (1 mm = 5 TUM units), bit for bit,
@@ -165,10 +151,10 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
 TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
   const std::string dir = test::freshDir() + "/copy";
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " record --source tum:" +
-                          test::tumDir(kXyz) + " --out " + dir,
-                      &output),
-            0)
+  ASSERT_EQ(
+      test::run(test::binary() + " record --source tum:" + test::tumDir(kXyz) + " --out " + dir,
+                &output),
+      0)
       << output;
   const TumSequence original(test::tumDir(kXyz));
   expectCompleteRecording(dir, original.size());
@@ -176,31 +162,27 @@ TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
   ASSERT_EQ(copy.size(), original.size());
   for (std::size_t i = 0; i < copy.size(); ++i) {
     EXPECT_NEAR(copy[i].rgb_time, original[i].rgb_time, 5e-7);
-    const cv::Mat depth_a =
-        cv::imread(original[i].depth_path, cv::IMREAD_UNCHANGED);
-    const cv::Mat depth_b =
-        cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_a = cv::imread(original[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_b = cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
     ASSERT_EQ(depth_b.type(), CV_16UC1);
-    EXPECT_EQ(cv::norm(depth_a, depth_b, cv::NORM_INF), 0)
-        << copy[i].depth_path;
+    EXPECT_EQ(cv::norm(depth_a, depth_b, cv::NORM_INF), 0) << copy[i].depth_path;
     const cv::Mat color_a = cv::imread(original[i].rgb_path, cv::IMREAD_COLOR);
     const cv::Mat color_b = cv::imread(copy[i].rgb_path, cv::IMREAD_COLOR);
     EXPECT_EQ(cv::norm(color_a, color_b, cv::NORM_INF), 0) << copy[i].rgb_path;
   }
   // --frames stops early; an existing recording is never overwritten.
   const std::string five = test::freshDir() + "/five";
-  ASSERT_EQ(test::run(test::binary() + " record --source tum:" +
-                          test::tumDir(kXyz) + " --out " + five + " --frames 5",
+  ASSERT_EQ(test::run(test::binary() + " record --source tum:" + test::tumDir(kXyz) + " --out " +
+                          five + " --frames 5",
                       &output),
             0)
       << output;
   expectCompleteRecording(five, 5);
-  EXPECT_EQ(test::run(test::binary() + " record --source tum:" +
-                          test::tumDir(kXyz) + " --out " + five,
-                      &output),
-            2);
-  EXPECT_NE(output.find("already holds a recording"), std::string::npos)
-      << output;
+  EXPECT_EQ(
+      test::run(test::binary() + " record --source tum:" + test::tumDir(kXyz) + " --out " + five,
+                &output),
+      2);
+  EXPECT_NE(output.find("already holds a recording"), std::string::npos) << output;
   expectCompleteRecording(five, 5);
 }
 
@@ -209,9 +191,8 @@ TEST(OpenNI2Cli, RecordStopsCleanlyOnSigintWithCompleteLists) {
   const std::string dir = base + "/interrupted";
   // At the recorded speed the 100 frames take about 3.3 s; interrupt after
   // about one.
-  test::Process record({test::binary(), "record", "--source",
-                        "tum:" + test::tumDir(kRpy), "--out", dir, "--set",
-                        "replay.rate=1"},
+  test::Process record({test::binary(), "record", "--source", "tum:" + test::tumDir(kRpy), "--out",
+                        dir, "--set", "replay.rate=1"},
                        base + "/record.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(1200));
   record.signal(SIGINT);
@@ -237,20 +218,17 @@ std::string privateOpenNI2Runtime() {
 
 TEST(OpenNI2Cli, RecordsATumDeviceAcrossAnUnplugBitIdentically) {
   const std::string runtime = privateOpenNI2Runtime();
-  if (runtime.empty())
-    GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  if (runtime.empty()) GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
   const std::string dir = test::freshDir() + "/through_openni2";
-  const std::string uri = "tum:" + test::tumDir(kXyz) +
-                          "?disconnect_after=10&reconnect_after_ms=400";
+  const std::string uri =
+      "tum:" + test::tumDir(kXyz) + "?disconnect_after=10&reconnect_after_ms=400";
   std::string output;
   ASSERT_EQ(test::run("LD_LIBRARY_PATH=" + runtime + " " + test::binary() +
-                          " record --source 'openni2:" + uri + "' --out " +
-                          dir + " --frames 20",
+                          " record --source 'openni2:" + uri + "' --out " + dir + " --frames 20",
                       &output),
             0)
       << output;
-  EXPECT_NE(output.find("reopened"), std::string::npos)
-      << output; // it did unplug and return
+  EXPECT_NE(output.find("reopened"), std::string::npos) << output;  // it did unplug and return
   expectCompleteRecording(dir, 20);
   // Each recorded frame is the folder's pair with the same stamp, bit for bit
   // (depth through DEPTH_100_UM and back to TUM units). A live device may
@@ -261,16 +239,11 @@ TEST(OpenNI2Cli, RecordsATumDeviceAcrossAnUnplugBitIdentically) {
   ASSERT_EQ(copy.size(), 20u);
   std::size_t j = 0;
   for (std::size_t i = 0; i < copy.size(); ++i) {
-    while (j < original.size() &&
-           original[j].rgb_time < copy[i].rgb_time - 5e-7)
-      ++j;
-    ASSERT_LT(j, original.size())
-        << "no original frame at " << copy[i].rgb_time;
+    while (j < original.size() && original[j].rgb_time < copy[i].rgb_time - 5e-7) ++j;
+    ASSERT_LT(j, original.size()) << "no original frame at " << copy[i].rgb_time;
     EXPECT_NEAR(copy[i].rgb_time, original[j].rgb_time, 5e-7) << i;
-    const cv::Mat depth_a =
-        cv::imread(original[j].depth_path, cv::IMREAD_UNCHANGED);
-    const cv::Mat depth_b =
-        cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_a = cv::imread(original[j].depth_path, cv::IMREAD_UNCHANGED);
+    const cv::Mat depth_b = cv::imread(copy[i].depth_path, cv::IMREAD_UNCHANGED);
     EXPECT_EQ(cv::norm(depth_a, depth_b, cv::NORM_INF), 0) << i;
     const cv::Mat color_a = cv::imread(original[j].rgb_path, cv::IMREAD_COLOR);
     const cv::Mat color_b = cv::imread(copy[i].rgb_path, cv::IMREAD_COLOR);
@@ -281,17 +254,15 @@ TEST(OpenNI2Cli, RecordsATumDeviceAcrossAnUnplugBitIdentically) {
 
 TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   const std::string runtime = privateOpenNI2Runtime();
-  if (runtime.empty())
-    GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  if (runtime.empty()) GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
   const std::string dir = test::freshDir();
-  const std::string uri = "tum:" + test::tumDir(kXyz) +
-                          "?disconnect_after=12&reconnect_after_ms=400";
+  const std::string uri =
+      "tum:" + test::tumDir(kXyz) + "?disconnect_after=12&reconnect_after_ms=400";
   // A live device never ends by itself: stop it with SIGINT once the folder has
   // played.
   setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
-  test::Process map({test::binary(), "--source", "openni2:" + uri, "--out",
-                     dir + "/map.pcd", "--stats", dir + "/stats.json",
-                     "--no-render", "-q"},
+  test::Process map({test::binary(), "--source", "openni2:" + uri, "--out", dir + "/map.pcd",
+                     "--stats", dir + "/stats.json", "--no-render", "-q"},
                     dir + "/map.log");
   unsetenv("LD_LIBRARY_PATH");
   std::this_thread::sleep_for(std::chrono::seconds(6));
@@ -322,8 +293,7 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
 // truth file in both runs.
 TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
   const std::string runtime = privateOpenNI2Runtime();
-  if (runtime.empty())
-    GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  if (runtime.empty()) GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
   const std::string dir = test::freshDir();
   const std::string folder = test::tumDir(kXyz);
   const std::vector<std::string> common = {
@@ -333,15 +303,13 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
       "--set",       "keyframe.every_n=1",
       "--no-render", "-q"};
 
-  std::vector<std::string> live = {test::binary(), "--source",
-                                   "openni2:tum:" + folder, "--out",
+  std::vector<std::string> live = {test::binary(), "--source", "openni2:tum:" + folder, "--out",
                                    dir + "/device.pcd"};
   live.insert(live.end(), common.begin(), common.end());
   setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
   test::Process device_run(live, dir + "/device.log");
   unsetenv("LD_LIBRARY_PATH");
-  std::this_thread::sleep_for(
-      std::chrono::seconds(5)); // the folder plays in ~1.1 s
+  std::this_thread::sleep_for(std::chrono::seconds(5));  // the folder plays in ~1.1 s
   device_run.signal(SIGINT);
   ASSERT_EQ(device_run.wait(120), 0) << test::readFile(dir + "/device.log");
 
@@ -351,12 +319,10 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
     std::ifstream keyframes(dir + "/device_keyframes.txt");
     std::string line;
     while (std::getline(keyframes, line))
-      if (!line.empty() && line[0] != '#')
-        mapped.push_back(std::stod(line));
+      if (!line.empty() && line[0] != '#') mapped.push_back(std::stod(line));
   }
   const TumSequence sequence(folder);
-  ASSERT_GE(mapped.size(), sequence.size() / 2)
-      << test::readFile(dir + "/device.log");
+  ASSERT_GE(mapped.size(), sequence.size() / 2) << test::readFile(dir + "/device.log");
   const std::string copy = test::copySequence(folder, dir + "/selected");
   {
     std::ofstream rgb(copy + "/rgb.txt"), depth(copy + "/depth.txt");
@@ -364,24 +330,20 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
     depth << std::fixed << std::setprecision(6);
     std::size_t listed = 0;
     for (std::size_t i = 0; i < sequence.size(); ++i) {
-      const bool used =
-          std::any_of(mapped.begin(), mapped.end(), [&](double stamp) {
-            return std::abs(stamp - sequence[i].rgb_time) < 1e-5;
-          });
-      if (!used)
-        continue;
+      const bool used = std::any_of(mapped.begin(), mapped.end(), [&](double stamp) {
+        return std::abs(stamp - sequence[i].rgb_time) < 1e-5;
+      });
+      if (!used) continue;
       ++listed;
-      rgb << sequence[i].rgb_time << " rgb/"
-          << fs::path(sequence[i].rgb_path).filename().string() << "\n";
+      rgb << sequence[i].rgb_time << " rgb/" << fs::path(sequence[i].rgb_path).filename().string()
+          << "\n";
       depth << sequence[i].depth_time << " depth/"
             << fs::path(sequence[i].depth_path).filename().string() << "\n";
     }
-    ASSERT_EQ(listed, mapped.size())
-        << "a device stamp that is not a frame of the folder";
+    ASSERT_EQ(listed, mapped.size()) << "a device stamp that is not a frame of the folder";
   }
-  std::vector<std::string> direct = {
-      test::binary(), "--source", "tum:" + copy,      "--rate",
-      "max",          "--out",    dir + "/direct.pcd"};
+  std::vector<std::string> direct = {test::binary(), "--source", "tum:" + copy,      "--rate",
+                                     "max",          "--out",    dir + "/direct.pcd"};
   direct.insert(direct.end(), common.begin(), common.end());
   test::Process direct_run(direct, dir + "/direct.log");
   ASSERT_EQ(direct_run.wait(120), 0) << test::readFile(dir + "/direct.log");
@@ -392,8 +354,7 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
   const MapCloud a = test::loadMap(dir + "/device.pcd");
   const MapCloud b = test::loadMap(dir + "/direct.pcd");
   ASSERT_GT(a.size(), 50000u);
-  EXPECT_NEAR(static_cast<double>(a.size()), static_cast<double>(b.size()),
-              1e-4 * b.size());
+  EXPECT_NEAR(static_cast<double>(a.size()), static_cast<double>(b.size()), 1e-4 * b.size());
   // One point per 1 cm voxel: pair the points by voxel.
   auto voxel = [](const pcl::PointXYZRGB &p) {
     return std::array<long, 3>{std::lround(std::floor(p.x / 0.01f)),
@@ -401,24 +362,19 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
                                std::lround(std::floor(p.z / 0.01f))};
   };
   std::map<std::array<long, 3>, pcl::PointXYZRGB> by_voxel;
-  for (const auto &p : a.points)
-    by_voxel.emplace(voxel(p), p);
+  for (const auto &p : a.points) by_voxel.emplace(voxel(p), p);
   std::size_t same = 0;
   for (const auto &q : b.points) {
     const auto found = by_voxel.find(voxel(q));
-    if (found == by_voxel.end())
-      continue;
+    if (found == by_voxel.end()) continue;
     const pcl::PointXYZRGB &p = found->second;
-    same += (p.getVector3fMap() - q.getVector3fMap()).cwiseAbs().maxCoeff() <
-                1e-4f &&
-            std::abs(int(p.r) - int(q.r)) <= 1 &&
-            std::abs(int(p.g) - int(q.g)) <= 1 &&
+    same += (p.getVector3fMap() - q.getVector3fMap()).cwiseAbs().maxCoeff() < 1e-4f &&
+            std::abs(int(p.r) - int(q.r)) <= 1 && std::abs(int(p.g) - int(q.g)) <= 1 &&
             std::abs(int(p.b) - int(q.b)) <= 1;
   }
-  EXPECT_GE(same,
-            static_cast<std::size_t>(0.999 * static_cast<double>(b.size())))
+  EXPECT_GE(same, static_cast<std::size_t>(0.999 * static_cast<double>(b.size())))
       << same << " of " << b.size() << " points agree";
 }
 
-} // namespace
-} // namespace rgbdmap
+}  // namespace
+}  // namespace rgbdmap

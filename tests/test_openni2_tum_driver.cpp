@@ -53,23 +53,21 @@ struct ReadFrame {
   bool cropping = false;
   int crop_x = 0;
   int crop_y = 0;
-  cv::Mat image; // CV_16UC1 depth or CV_8UC3 RGB, a deep copy
+  cv::Mat image;  // CV_16UC1 depth or CV_8UC3 RGB, a deep copy
 };
 
 // Reads up to `count` frames from whichever stream is ready first; stops early
 // when no frame comes within `timeout_ms`.
-std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams,
-                                  std::size_t count, int timeout_ms = 3000) {
+std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams, std::size_t count,
+                                  int timeout_ms = 3000) {
   std::vector<ReadFrame> frames;
   while (frames.size() < count) {
     int ready = -1;
-    if (openni::OpenNI::waitForAnyStream(
-            streams.data(), static_cast<int>(streams.size()), &ready,
-            timeout_ms) != openni::STATUS_OK)
+    if (openni::OpenNI::waitForAnyStream(streams.data(), static_cast<int>(streams.size()), &ready,
+                                         timeout_ms) != openni::STATUS_OK)
       break;
     openni::VideoFrameRef ref;
-    if (streams[ready]->readFrame(&ref) != openni::STATUS_OK || !ref.isValid())
-      continue;
+    if (streams[ready]->readFrame(&ref) != openni::STATUS_OK || !ref.isValid()) continue;
     ReadFrame frame;
     frame.sensor = ref.getSensorType();
     frame.format = ref.getVideoMode().getPixelFormat();
@@ -81,8 +79,7 @@ std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams,
     frame.crop_x = ref.getCropOriginX();
     frame.crop_y = ref.getCropOriginY();
     const int type = frame.sensor == openni::SENSOR_DEPTH ? CV_16UC1 : CV_8UC3;
-    frame.image = cv::Mat(frame.height, frame.width, type,
-                          const_cast<void *>(ref.getData()),
+    frame.image = cv::Mat(frame.height, frame.width, type, const_cast<void *>(ref.getData()),
                           static_cast<std::size_t>(ref.getStrideInBytes()))
                       .clone();
     frames.push_back(std::move(frame));
@@ -90,12 +87,10 @@ std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams,
   return frames;
 }
 
-std::vector<ReadFrame> ofSensor(const std::vector<ReadFrame> &frames,
-                                openni::SensorType sensor) {
+std::vector<ReadFrame> ofSensor(const std::vector<ReadFrame> &frames, openni::SensorType sensor) {
   std::vector<ReadFrame> selected;
   for (const ReadFrame &f : frames)
-    if (f.sensor == sensor)
-      selected.push_back(f);
+    if (f.sensor == sensor) selected.push_back(f);
   return selected;
 }
 
@@ -127,8 +122,7 @@ cv::Mat expectedDepth100um(const cv::Mat &raw) {
   for (int y = 0; y < raw.rows; ++y)
     for (int x = 0; x < raw.cols; ++x) {
       const int value = raw.at<std::uint16_t>(y, x);
-      expected.at<std::uint16_t>(y, x) =
-          static_cast<std::uint16_t>(value <= 32767 ? 2 * value : 0);
+      expected.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(value <= 32767 ? 2 * value : 0);
     }
   return expected;
 }
@@ -138,36 +132,30 @@ cv::Mat expectedDepthMm(const cv::Mat &raw) {
   cv::Mat expected(raw.size(), CV_16UC1);
   for (int y = 0; y < raw.rows; ++y)
     for (int x = 0; x < raw.cols; ++x)
-      expected.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(
-          (2 * raw.at<std::uint16_t>(y, x) + 5) / 10);
+      expected.at<std::uint16_t>(y, x) =
+          static_cast<std::uint16_t>((2 * raw.at<std::uint16_t>(y, x) + 5) / 10);
   return expected;
 }
 
 // Number of differing elements; 0 when equal (sizes and types must match).
 int differences(const cv::Mat &a, const cv::Mat &b) {
-  if (a.size() != b.size() || a.type() != b.type())
-    return -1;
+  if (a.size() != b.size() || a.type() != b.type()) return -1;
   cv::Mat diff;
   cv::compare(a.reshape(1), b.reshape(1), diff, cv::CMP_NE);
   return cv::countNonZero(diff);
 }
 
-const openni::VideoMode *findMode(const openni::SensorInfo *sensor,
-                                  openni::PixelFormat format) {
-  if (sensor == nullptr)
-    return nullptr;
-  const openni::Array<openni::VideoMode> &modes =
-      sensor->getSupportedVideoModes();
+const openni::VideoMode *findMode(const openni::SensorInfo *sensor, openni::PixelFormat format) {
+  if (sensor == nullptr) return nullptr;
+  const openni::Array<openni::VideoMode> &modes = sensor->getSupportedVideoModes();
   for (int i = 0; i < modes.getSize(); ++i)
-    if (modes[i].getPixelFormat() == format)
-      return &modes[i];
+    if (modes[i].getPixelFormat() == format) return &modes[i];
   return nullptr;
 }
 
 std::string loadedOpenNI2() {
   Dl_info info{};
-  if (dladdr(reinterpret_cast<void *>(&oniInitialize), &info) == 0 ||
-      info.dli_fname == nullptr)
+  if (dladdr(reinterpret_cast<void *>(&oniInitialize), &info) == 0 || info.dli_fname == nullptr)
     return "(unknown)";
   return info.dli_fname;
 }
@@ -176,8 +164,7 @@ std::vector<std::string> enumeratedUris() {
   openni::Array<openni::DeviceInfo> devices;
   openni::OpenNI::enumerateDevices(&devices);
   std::vector<std::string> uris;
-  for (int i = 0; i < devices.getSize(); ++i)
-    uris.emplace_back(devices[i].getUri());
+  for (int i = 0; i < devices.getSize(); ++i) uris.emplace_back(devices[i].getUri());
   return uris;
 }
 
@@ -185,23 +172,20 @@ bool contains(const std::vector<std::string> &list, const std::string &item) {
   return std::find(list.begin(), list.end(), item) != list.end();
 }
 
-void replaceLine(const std::string &path, std::size_t number,
-                 const std::string &text) {
+void replaceLine(const std::string &path, std::size_t number, const std::string &text) {
   std::ifstream in(path);
   std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);)
-    lines.push_back(line);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
   ASSERT_LE(number, lines.size()) << path;
   lines[number - 1] = text;
   std::ofstream out(path, std::ios::trunc);
-  for (const std::string &line : lines)
-    out << line << "\n";
+  for (const std::string &line : lines) out << line << "\n";
 }
 
 // Records OpenNI2's device connected/disconnected events for one URI.
 class PlugEvents : public openni::OpenNI::DeviceConnectedListener,
                    public openni::OpenNI::DeviceDisconnectedListener {
-public:
+ public:
   explicit PlugEvents(std::string uri) : uri_(std::move(uri)) {
     openni::OpenNI::addDeviceConnectedListener(this);
     openni::OpenNI::addDeviceDisconnectedListener(this);
@@ -210,9 +194,7 @@ public:
     openni::OpenNI::removeDeviceConnectedListener(this);
     openni::OpenNI::removeDeviceDisconnectedListener(this);
   }
-  void onDeviceConnected(const openni::DeviceInfo *info) override {
-    record(info, connected_);
-  }
+  void onDeviceConnected(const openni::DeviceInfo *info) override { record(info, connected_); }
   void onDeviceDisconnected(const openni::DeviceInfo *info) override {
     record(info, disconnected_);
   }
@@ -229,16 +211,14 @@ public:
     return disconnected_;
   }
 
-private:
+ private:
   void record(const openni::DeviceInfo *info, int &counter) {
-    if (info == nullptr || uri_ != info->getUri())
-      return;
+    if (info == nullptr || uri_ != info->getUri()) return;
     std::lock_guard<std::mutex> lock(mutex_);
     ++counter;
     changed_.notify_all();
   }
-  bool waitFor(const int &counter, int count,
-               std::chrono::milliseconds timeout) {
+  bool waitFor(const int &counter, int count, std::chrono::milliseconds timeout) {
     std::unique_lock<std::mutex> lock(mutex_);
     return changed_.wait_for(lock, timeout, [&] { return counter >= count; });
   }
@@ -251,16 +231,14 @@ private:
 };
 
 class OpenNI2TumDriver : public ::testing::Test {
-protected:
+ protected:
   void SetUp() override {
     // Listed folders are announced when OpenNI2 initializes, so enumeration
     // shows them.
-    const std::string listed =
-        test::tumDir(kXyz) + ":" + test::tumDir(kRpy) + ":" + kMissingListed;
+    const std::string listed = test::tumDir(kXyz) + ":" + test::tumDir(kRpy) + ":" + kMissingListed;
     ASSERT_EQ(::setenv("RGBDMAP_TUM_DEVICES", listed.c_str(), 1), 0);
     const std::string runtime = loadedOpenNI2();
-    ASSERT_EQ(fs::path(runtime).parent_path(),
-              fs::path(RGBDMAP_OPENNI2_PRIVATE_DIR))
+    ASSERT_EQ(fs::path(runtime).parent_path(), fs::path(RGBDMAP_OPENNI2_PRIVATE_DIR))
         << "this program must load the private OpenNI2 runtime (build target "
            "openni2_tum_runtime) but loaded "
         << runtime;
@@ -269,8 +247,7 @@ protected:
     initialized_ = true;
   }
   void TearDown() override {
-    if (initialized_)
-      openni::OpenNI::shutdown();
+    if (initialized_) openni::OpenNI::shutdown();
     ::unsetenv("RGBDMAP_TUM_DEVICES");
   }
 
@@ -296,10 +273,8 @@ Playback playOnce(const std::string &folder) {
   const Clock::time_point start = Clock::now();
   EXPECT_EQ(depth.start(), openni::STATUS_OK);
   EXPECT_EQ(color.start(), openni::STATUS_OK);
-  const std::vector<ReadFrame> frames =
-      readFrames({&depth, &color}, 1000, 1500);
-  play.seconds =
-      std::chrono::duration<double>(Clock::now() - start).count() - 1.5;
+  const std::vector<ReadFrame> frames = readFrames({&depth, &color}, 1000, 1500);
+  play.seconds = std::chrono::duration<double>(Clock::now() - start).count() - 1.5;
   // Without loop=1 the device has nothing more to send (readFrames waited 1.5 s
   // for more).
   depth.stop();
@@ -315,20 +290,17 @@ TEST_F(OpenNI2TumDriver, FramesAreBitIdenticalToTheFolderAtTheRecordedTiming) {
 
   {
     openni::Device device;
-    ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()),
-              openni::STATUS_OK)
+    ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK)
         << openni::OpenNI::getExtendedError();
     EXPECT_STREQ(device.getDeviceInfo().getVendor(), "TUM RGB-D");
     EXPECT_STREQ(device.getDeviceInfo().getName(), kXyz.c_str());
     openni::VideoStream depth, color;
     ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
     ASSERT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
-    EXPECT_EQ(depth.getVideoMode().getPixelFormat(),
-              openni::PIXEL_FORMAT_DEPTH_100_UM);
+    EXPECT_EQ(depth.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_DEPTH_100_UM);
     EXPECT_EQ(depth.getVideoMode().getResolutionX(), 640);
     EXPECT_EQ(depth.getVideoMode().getResolutionY(), 480);
-    EXPECT_EQ(color.getVideoMode().getPixelFormat(),
-              openni::PIXEL_FORMAT_RGB888);
+    EXPECT_EQ(color.getVideoMode().getPixelFormat(), openni::PIXEL_FORMAT_RGB888);
     EXPECT_EQ(color.getVideoMode().getResolutionX(), 640);
     EXPECT_EQ(color.getVideoMode().getResolutionY(), 480);
   }
@@ -338,10 +310,8 @@ TEST_F(OpenNI2TumDriver, FramesAreBitIdenticalToTheFolderAtTheRecordedTiming) {
   // loaded machine, a sanitizer build) loses that frame. Every delivered frame
   // must be exact; frames lost to a stall are looked for in another play, so
   // every frame of the folder is compared.
-  std::vector<bool> seen_depth(sequence.size(), false),
-      seen_color(sequence.size(), false);
-  const double recorded =
-      sequence[sequence.size() - 1].rgb_time - sequence[0].rgb_time;
+  std::vector<bool> seen_depth(sequence.size(), false), seen_color(sequence.size(), false);
+  const double recorded = sequence[sequence.size() - 1].rgb_time - sequence[0].rgb_time;
   for (int pass = 0; pass < 4; ++pass) {
     const Playback play = playOnce(test::tumDir(kXyz));
     ASSERT_FALSE(play.depths.empty());
@@ -359,16 +329,14 @@ TEST_F(OpenNI2TumDriver, FramesAreBitIdenticalToTheFolderAtTheRecordedTiming) {
         ASSERT_LE(frame.index, static_cast<int>(sequence.size()));
         previous = frame.index;
         const std::size_t i = static_cast<std::size_t>(frame.index - 1);
-        SCOPED_TRACE("pair " + std::to_string(i) + ": " +
-                     sequence[i].depth_path);
+        SCOPED_TRACE("pair " + std::to_string(i) + ": " + sequence[i].depth_path);
         if (frame.sensor == openni::SENSOR_DEPTH) {
           seen_depth[i] = true;
           EXPECT_EQ(frame.timestamp, microseconds(sequence[i].depth_time));
           const cv::Mat raw = rawDepth(sequence, i);
           double max_raw = 0;
           cv::minMaxLoc(raw, nullptr, &max_raw);
-          EXPECT_LE(max_raw, 32767)
-              << "beyond 6.5535 m: not representable in 100 um";
+          EXPECT_LE(max_raw, 32767) << "beyond 6.5535 m: not representable in 100 um";
           EXPECT_EQ(frame.format, openni::PIXEL_FORMAT_DEPTH_100_UM);
           EXPECT_EQ(differences(frame.image, expectedDepth100um(raw)), 0);
         } else {
@@ -384,30 +352,25 @@ TEST_F(OpenNI2TumDriver, FramesAreBitIdenticalToTheFolderAtTheRecordedTiming) {
       break;
   }
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    EXPECT_TRUE(seen_depth[i])
-        << "depth " << i << " never delivered in 4 plays";
-    EXPECT_TRUE(seen_color[i])
-        << "colour " << i << " never delivered in 4 plays";
+    EXPECT_TRUE(seen_depth[i]) << "depth " << i << " never delivered in 4 plays";
+    EXPECT_TRUE(seen_color[i]) << "colour " << i << " never delivered in 4 plays";
   }
 }
 
 TEST_F(OpenNI2TumDriver, MillimetreModeIsTheSameDepthRounded) {
   TumSequence sequence(test::tumDir(kXyz));
   openni::Device device;
-  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()),
-            openni::STATUS_OK);
+  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK);
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   const openni::VideoMode *mm =
-      findMode(device.getSensorInfo(openni::SENSOR_DEPTH),
-               openni::PIXEL_FORMAT_DEPTH_1_MM);
+      findMode(device.getSensorInfo(openni::SENSOR_DEPTH), openni::PIXEL_FORMAT_DEPTH_1_MM);
   ASSERT_NE(mm, nullptr) << "no millimetre mode offered";
   ASSERT_EQ(depth.setVideoMode(*mm), openni::STATUS_OK);
-  EXPECT_EQ(depth.getMaxPixelValue(), 13107); // 65535 / 5000 m in mm
+  EXPECT_EQ(depth.getMaxPixelValue(), 13107);  // 65535 / 5000 m in mm
   openni::VideoMode qvga = *mm;
   qvga.setResolution(320, 240);
-  EXPECT_NE(depth.setVideoMode(qvga), openni::STATUS_OK)
-      << "only 640x480 exists";
+  EXPECT_NE(depth.setVideoMode(qvga), openni::STATUS_OK) << "only 640x480 exists";
 
   ASSERT_EQ(depth.start(), openni::STATUS_OK);
   const std::vector<ReadFrame> frames = readFrames({&depth}, 3);
@@ -415,8 +378,7 @@ TEST_F(OpenNI2TumDriver, MillimetreModeIsTheSameDepthRounded) {
   ASSERT_EQ(frames.size(), 3u);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     EXPECT_EQ(frames[i].format, openni::PIXEL_FORMAT_DEPTH_1_MM);
-    EXPECT_EQ(
-        differences(frames[i].image, expectedDepthMm(rawDepth(sequence, i))), 0)
+    EXPECT_EQ(differences(frames[i].image, expectedDepthMm(rawDepth(sequence, i))), 0)
         << sequence[i].depth_path;
   }
 }
@@ -424,26 +386,22 @@ TEST_F(OpenNI2TumDriver, MillimetreModeIsTheSameDepthRounded) {
 TEST_F(OpenNI2TumDriver, FieldOfViewComesFromTheFolderCameraPreset) {
   // A freiburg1 folder gets the fr1 intrinsics; any other folder the default
   // ones. The values must be those of config/*.yaml.
-  const std::string renamed = test::copySequence(
-      test::tumDir(kXyz), test::freshDir() + "/my_recording");
+  const std::string renamed =
+      test::copySequence(test::tumDir(kXyz), test::freshDir() + "/my_recording");
   for (const auto &[folder, preset] :
-       {std::pair<std::string, std::string>{test::tumDir(kXyz), "tum_fr1"},
-        {renamed, "default"}}) {
+       {std::pair<std::string, std::string>{test::tumDir(kXyz), "tum_fr1"}, {renamed, "default"}}) {
     SCOPED_TRACE(folder);
     Config config;
     config.loadPreset(preset);
     openni::Device device;
     ASSERT_EQ(device.open(("tum:" + folder).c_str()), openni::STATUS_OK)
         << openni::OpenNI::getExtendedError();
-    for (const openni::SensorType sensor :
-         {openni::SENSOR_DEPTH, openni::SENSOR_COLOR}) {
+    for (const openni::SensorType sensor : {openni::SENSOR_DEPTH, openni::SENSOR_COLOR}) {
       openni::VideoStream stream;
       ASSERT_EQ(stream.create(device, sensor), openni::STATUS_OK);
       // OpenNI2 programs recover focal lengths as size / (2 tan(fov / 2)).
-      const double fx =
-          640 / (2 * std::tan(stream.getHorizontalFieldOfView() / 2));
-      const double fy =
-          480 / (2 * std::tan(stream.getVerticalFieldOfView() / 2));
+      const double fx = 640 / (2 * std::tan(stream.getHorizontalFieldOfView() / 2));
+      const double fy = 480 / (2 * std::tan(stream.getVerticalFieldOfView() / 2));
       EXPECT_NEAR(fx, config.camera.fx, 1e-3);
       EXPECT_NEAR(fy, config.camera.fy, 1e-3);
     }
@@ -452,46 +410,37 @@ TEST_F(OpenNI2TumDriver, FieldOfViewComesFromTheFolderCameraPreset) {
 
 TEST_F(OpenNI2TumDriver, DepthIsRegisteredToColour) {
   openni::Device device;
-  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()),
+  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK);
+  EXPECT_TRUE(device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR));
+  EXPECT_FALSE(device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_OFF));
+  EXPECT_EQ(device.getImageRegistrationMode(), openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
+  EXPECT_EQ(device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR),
             openni::STATUS_OK);
-  EXPECT_TRUE(device.isImageRegistrationModeSupported(
-      openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR));
-  EXPECT_FALSE(
-      device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_OFF));
-  EXPECT_EQ(device.getImageRegistrationMode(),
-            openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
-  EXPECT_EQ(device.setImageRegistrationMode(
-                openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR),
-            openni::STATUS_OK);
-  EXPECT_NE(device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_OFF),
-            openni::STATUS_OK);
-  EXPECT_EQ(device.getImageRegistrationMode(),
-            openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
+  EXPECT_NE(device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_OFF), openni::STATUS_OK);
+  EXPECT_EQ(device.getImageRegistrationMode(), openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
 
   openni::VideoStream depth, color;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
   int color_x = -1, color_y = -1;
-  ASSERT_EQ(openni::CoordinateConverter::convertDepthToColor(
-                depth, color, 123, 456, 5000, &color_x, &color_y),
+  ASSERT_EQ(openni::CoordinateConverter::convertDepthToColor(depth, color, 123, 456, 5000, &color_x,
+                                                             &color_y),
             openni::STATUS_OK);
   EXPECT_EQ(color_x, 123);
   EXPECT_EQ(color_y, 456);
-  openni::VideoStream infrared; // a TUM folder has none
+  openni::VideoStream infrared;  // a TUM folder has none
   EXPECT_NE(infrared.create(device, openni::SENSOR_IR), openni::STATUS_OK);
 }
 
 TEST_F(OpenNI2TumDriver, CroppingAndMirroringShapeTheDeliveredFrames) {
   TumSequence sequence(test::tumDir(kXyz));
   openni::Device device;
-  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()),
-            openni::STATUS_OK);
+  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK);
   openni::VideoStream depth, color;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
   EXPECT_FALSE(color.getMirroringEnabled());
-  EXPECT_NE(depth.setCropping(600, 0, 100, 10), openni::STATUS_OK)
-      << "crop beyond the image";
+  EXPECT_NE(depth.setCropping(600, 0, 100, 10), openni::STATUS_OK) << "crop beyond the image";
   ASSERT_EQ(depth.setCropping(20, 30, 300, 200), openni::STATUS_OK);
   ASSERT_EQ(color.setCropping(100, 60, 200, 120), openni::STATUS_OK);
   ASSERT_EQ(color.setMirroringEnabled(true), openni::STATUS_OK);
@@ -511,58 +460,47 @@ TEST_F(OpenNI2TumDriver, CroppingAndMirroringShapeTheDeliveredFrames) {
   ASSERT_EQ(colors.size(), 1u);
 
   EXPECT_TRUE(depths[0].cropping);
-  EXPECT_EQ(cv::Rect(depths[0].crop_x, depths[0].crop_y, depths[0].width,
-                     depths[0].height),
+  EXPECT_EQ(cv::Rect(depths[0].crop_x, depths[0].crop_y, depths[0].width, depths[0].height),
             cv::Rect(20, 30, 300, 200));
-  EXPECT_EQ(
-      differences(depths[0].image, expectedDepth100um(rawDepth(sequence, 0))(
-                                       cv::Rect(20, 30, 300, 200))),
-      0);
+  EXPECT_EQ(differences(depths[0].image,
+                        expectedDepth100um(rawDepth(sequence, 0))(cv::Rect(20, 30, 300, 200))),
+            0);
 
   cv::Mat mirrored;
   cv::flip(rgbColor(sequence, 0), mirrored, 1);
   EXPECT_TRUE(colors[0].cropping);
-  EXPECT_EQ(cv::Rect(colors[0].crop_x, colors[0].crop_y, colors[0].width,
-                     colors[0].height),
+  EXPECT_EQ(cv::Rect(colors[0].crop_x, colors[0].crop_y, colors[0].width, colors[0].height),
             cv::Rect(100, 60, 200, 120));
-  EXPECT_EQ(differences(colors[0].image, mirrored(cv::Rect(100, 60, 200, 120))),
-            0);
+  EXPECT_EQ(differences(colors[0].image, mirrored(cv::Rect(100, 60, 200, 120))), 0);
 }
 
-TEST_F(OpenNI2TumDriver,
-       DisconnectAfterStopsAfterExactlyNFramesAndReplugContinues) {
+TEST_F(OpenNI2TumDriver, DisconnectAfterStopsAfterExactlyNFramesAndReplugContinues) {
   TumSequence sequence(test::tumDir(kXyz));
-  const std::string uri = "tum:" + test::tumDir(kXyz) +
-                          "?disconnect_after=5&reconnect_after_ms=4000";
+  const std::string uri =
+      "tum:" + test::tumDir(kXyz) + "?disconnect_after=5&reconnect_after_ms=4000";
   PlugEvents events(uri);
   std::vector<ReadFrame> first;
   {
     openni::Device device;
-    ASSERT_EQ(device.open(uri.c_str()), openni::STATUS_OK)
-        << openni::OpenNI::getExtendedError();
+    ASSERT_EQ(device.open(uri.c_str()), openni::STATUS_OK) << openni::OpenNI::getExtendedError();
     openni::VideoStream depth;
     ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
     ASSERT_EQ(depth.start(), openni::STATUS_OK);
-    first =
-        readFrames({&depth}, 10, 1200); // asks for more than 5: only 5 may come
+    first = readFrames({&depth}, 10, 1200);  // asks for more than 5: only 5 may come
     ASSERT_TRUE(events.waitDisconnected(1, std::chrono::milliseconds(0)))
         << "no disconnection reported after the frames stopped";
     EXPECT_FALSE(contains(enumeratedUris(), uri));
     openni::Device again;
-    EXPECT_NE(again.open(uri.c_str()), openni::STATUS_OK)
-        << "opened while unplugged";
+    EXPECT_NE(again.open(uri.c_str()), openni::STATUS_OK) << "opened while unplugged";
   }
   ASSERT_EQ(first.size(), 5u);
-  for (std::size_t i = 0; i < first.size(); ++i)
-    EXPECT_EQ(first[i].index, static_cast<int>(i + 1));
+  for (std::size_t i = 0; i < first.size(); ++i) EXPECT_EQ(first[i].index, static_cast<int>(i + 1));
 
   // The first connection was announced when the URI was opened.
-  ASSERT_TRUE(events.waitConnected(2, std::chrono::seconds(10)))
-      << "never plugged in again";
+  ASSERT_TRUE(events.waitConnected(2, std::chrono::seconds(10))) << "never plugged in again";
   EXPECT_TRUE(contains(enumeratedUris(), uri));
   openni::Device device;
-  ASSERT_EQ(device.open(uri.c_str()), openni::STATUS_OK)
-      << openni::OpenNI::getExtendedError();
+  ASSERT_EQ(device.open(uri.c_str()), openni::STATUS_OK) << openni::OpenNI::getExtendedError();
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(depth.start(), openni::STATUS_OK);
@@ -574,9 +512,7 @@ TEST_F(OpenNI2TumDriver,
     const std::size_t entry = first.size() + i;
     EXPECT_EQ(second[i].index, static_cast<int>(entry + 1));
     EXPECT_EQ(second[i].timestamp, microseconds(sequence[entry].depth_time));
-    EXPECT_EQ(differences(second[i].image,
-                          expectedDepth100um(rawDepth(sequence, entry))),
-              0);
+    EXPECT_EQ(differences(second[i].image, expectedDepth100um(rawDepth(sequence, entry))), 0);
   }
   EXPECT_TRUE(events.waitDisconnected(2, std::chrono::seconds(2)));
 }
@@ -584,21 +520,18 @@ TEST_F(OpenNI2TumDriver,
 TEST_F(OpenNI2TumDriver, LoopStartsOverWithIncreasingIndicesAndTimestamps) {
   TumSequence sequence(test::tumDir(kXyz));
   openni::Device device;
-  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz) + "?loop=1").c_str()),
-            openni::STATUS_OK)
+  ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz) + "?loop=1").c_str()), openni::STATUS_OK)
       << openni::OpenNI::getExtendedError();
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(depth.start(), openni::STATUS_OK);
-  const std::vector<ReadFrame> frames =
-      readFrames({&depth}, sequence.size() + 2);
+  const std::vector<ReadFrame> frames = readFrames({&depth}, sequence.size() + 2);
   depth.stop();
   ASSERT_EQ(frames.size(), sequence.size() + 2);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     EXPECT_EQ(frames[i].index, static_cast<int>(i + 1));
     if (i > 0) {
-      EXPECT_GT(frames[i].timestamp, frames[i - 1].timestamp)
-          << "frame " << i + 1;
+      EXPECT_GT(frames[i].timestamp, frames[i - 1].timestamp) << "frame " << i + 1;
     }
   }
   for (std::size_t entry = 0; entry < 2; ++entry)
@@ -616,14 +549,11 @@ TEST_F(OpenNI2TumDriver, UnreadableImagesAreSkippedAndTheRestDelivered) {
     // A colour PNG cut to a third of its size, and a depth image that does not
     // exist.
     fs::copy_file(original[corrupt_entry].rgb_path, dir + "/broken.png");
-    fs::resize_file(dir + "/broken.png",
-                    fs::file_size(dir + "/broken.png") / 3);
+    fs::resize_file(dir + "/broken.png", fs::file_size(dir + "/broken.png") / 3);
     replaceLine(copy + "/rgb.txt", original[corrupt_entry].rgb_line,
-                std::to_string(original[corrupt_entry].rgb_time) +
-                    " ../broken.png");
+                std::to_string(original[corrupt_entry].rgb_time) + " ../broken.png");
     replaceLine(copy + "/depth.txt", original[missing_entry].depth_line,
-                std::to_string(original[missing_entry].depth_time) +
-                    " depth/missing.png");
+                std::to_string(original[missing_entry].depth_time) + " depth/missing.png");
   }
   TumSequence sequence(copy);
   ASSERT_EQ(sequence.size(), 32u);
@@ -634,20 +564,15 @@ TEST_F(OpenNI2TumDriver, UnreadableImagesAreSkippedAndTheRestDelivered) {
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(depth.start(), openni::STATUS_OK);
-  const std::vector<ReadFrame> frames =
-      readFrames({&depth}, sequence.size(), 1000);
+  const std::vector<ReadFrame> frames = readFrames({&depth}, sequence.size(), 1000);
   depth.stop();
   ASSERT_EQ(frames.size(), sequence.size() - 2);
   std::size_t next = 0;
   for (std::size_t entry = 0; entry < sequence.size(); ++entry) {
-    if (entry == corrupt_entry || entry == missing_entry)
-      continue;
+    if (entry == corrupt_entry || entry == missing_entry) continue;
     ASSERT_LT(next, frames.size());
-    EXPECT_EQ(frames[next].index, static_cast<int>(entry + 1))
-        << "the gap shows the skipped pair";
-    EXPECT_EQ(differences(frames[next].image,
-                          expectedDepth100um(rawDepth(sequence, entry))),
-              0);
+    EXPECT_EQ(frames[next].index, static_cast<int>(entry + 1)) << "the gap shows the skipped pair";
+    EXPECT_EQ(differences(frames[next].image, expectedDepth100um(rawDepth(sequence, entry))), 0);
     ++next;
   }
 }
@@ -656,29 +581,24 @@ TEST_F(OpenNI2TumDriver, BadFoldersAndOptionsFailCleanlyNamingTheProblem) {
   const std::string missing = "/no/such/place/rgbd_dataset_freiburg1_gone";
   openni::Device device;
   EXPECT_NE(device.open(("tum:" + missing).c_str()), openni::STATUS_OK);
-  EXPECT_NE(std::string(openni::OpenNI::getExtendedError())
-                .find(missing + ": no such folder"),
+  EXPECT_NE(std::string(openni::OpenNI::getExtendedError()).find(missing + ": no such folder"),
             std::string::npos)
       << openni::OpenNI::getExtendedError();
 
   const std::string empty = test::freshDir();
   EXPECT_NE(device.open(("tum:" + empty).c_str()), openni::STATUS_OK);
-  EXPECT_NE(std::string(openni::OpenNI::getExtendedError())
-                .find(empty + "/rgb.txt: missing"),
+  EXPECT_NE(std::string(openni::OpenNI::getExtendedError()).find(empty + "/rgb.txt: missing"),
             std::string::npos)
       << openni::OpenNI::getExtendedError();
 
-  EXPECT_NE(
-      device.open(("tum:" + test::tumDir(kXyz) + "?loop=1&bogus=2").c_str()),
-      openni::STATUS_OK);
-  EXPECT_NE(std::string(openni::OpenNI::getExtendedError())
-                .find("unknown option 'bogus'"),
+  EXPECT_NE(device.open(("tum:" + test::tumDir(kXyz) + "?loop=1&bogus=2").c_str()),
+            openni::STATUS_OK);
+  EXPECT_NE(std::string(openni::OpenNI::getExtendedError()).find("unknown option 'bogus'"),
             std::string::npos)
       << openni::OpenNI::getExtendedError();
 
   // Still usable afterwards.
-  EXPECT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()),
-            openni::STATUS_OK)
+  EXPECT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK)
       << openni::OpenNI::getExtendedError();
 }
 
@@ -695,10 +615,9 @@ TEST_F(OpenNI2TumDriver, PrivateRuntimeKeepsTheSystemDrivers) {
   // Debian's OniFile cancels its player thread on close, which crashes a good
   // share of runs in OniFile itself.)
   for (const char *driver : {"libOniFile.so.0", "libPS1080.so.0"})
-    EXPECT_TRUE(fs::exists(fs::path(RGBDMAP_OPENNI2_PRIVATE_DIR) /
-                           "OpenNI2/Drivers" / driver))
+    EXPECT_TRUE(fs::exists(fs::path(RGBDMAP_OPENNI2_PRIVATE_DIR) / "OpenNI2/Drivers" / driver))
         << driver;
 }
 
-} // namespace
-} // namespace rgbdmap
+}  // namespace
+}  // namespace rgbdmap
