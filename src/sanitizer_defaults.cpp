@@ -16,6 +16,18 @@ const char* __tsan_default_suppressions() {
          "race:libOpenNI2.so\n"
          "mutex:libOpenNI2.so\n"
          "deadlock:libOpenNI2.so\n"
+         // OpenNI2's own drivers (recordings, PrimeSense cameras): their threads hand frames over
+         // through libOpenNI2, so TSan sees neither their locks' order nor the handover.
+         "called_from_lib:libOniFile.so\n"
+         "called_from_lib:libPS1080.so\n"
+         "called_from_lib:libPSLink.so\n"
+         "race:libOniFile.so\n"
+         "race:libPS1080.so\n"
+         "race:libPSLink.so\n"
+         "mutex:libOniFile.so\n"
+         "deadlock:libOniFile.so\n"
+         "mutex:libPS1080.so\n"
+         "deadlock:libPS1080.so\n"
          // OpenCV's image decoding asks GDAL, which takes its mutexes in varying order.
          "called_from_lib:libgdal.so\n"
          "deadlock:libgdal.so\n"

@@ -2,6 +2,7 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/rgbd.hpp>
+#include <optional>
 
 #include "rgbdmap/config.hpp"
 #include "rgbdmap/pose_provider.hpp"
@@ -19,6 +20,10 @@ class RgbdOdometryPoses : public PoseProvider {
     double max_depth = 4.0;
     double new_reference_translation = 0.05;  // m
     double new_reference_rotation = 0.0873;   // rad
+    // An estimate this far from the constant-velocity guess is a divergence, not motion: a
+    // hand-held camera at 30 fps does not change its speed by 0.15 m/frame or turn 20° more.
+    double max_jump_translation = 0.15;  // m
+    double max_jump_rotation = 0.35;     // rad
   };
   RgbdOdometryPoses(const CameraIntrinsics& camera, const Options& options);
 
@@ -28,6 +33,9 @@ class RgbdOdometryPoses : public PoseProvider {
 
  private:
   cv::Ptr<cv::rgbd::OdometryFrame> makeFrame(const Frame& frame);
+  // The estimate as a rigid motion, or nothing when it is not one or jumps away from the guess.
+  std::optional<Eigen::Isometry3d> plausible(const cv::Mat& Rt,
+                                             const Eigen::Isometry3d& guess) const;
 
   Options options_;
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry_;

@@ -35,15 +35,20 @@ bool RgbdOdometryPoses::estimate(Frame& frame) {
   const Eigen::Isometry3d guess = reference_pose_.inverse() * last_pose_ * velocity_;
   cv::Mat init, Rt;
   cv::eigen2cv(Eigen::Matrix4d(guess.inverse().matrix()), init);
-  if (!odometry_->compute(reference_, current, Rt, init) || Rt.empty()) {
+  const Eigen::Isometry3d predicted = last_pose_ * velocity_;
+  std::optional<Eigen::Isometry3d> relative;
+  if (odometry_->compute(reference_, current, Rt, init) && !Rt.empty())
+    relative = plausible(Rt, guess);
+  if (!relative) {
+    // Lost: this frame is not mapped. Tracking restarts from it at the predicted pose, so the
+    // next frame is aligned to a near image instead of a reference it can no longer match.
     ++failures_;
+    reference_ = current;
+    reference_pose_ = last_pose_ = predicted;
     frame.has_pose = false;
     return false;
   }
-  Eigen::Matrix4d rt;
-  cv::cv2eigen(Rt, rt);
-  Eigen::Isometry3d relative(rt);
-  const Eigen::Isometry3d pose = reference_pose_ * relative.inverse();
+  const Eigen::Isometry3d pose = reference_pose_ * relative->inverse();
   velocity_ = last_pose_.inverse() * pose;
   last_pose_ = pose;
   frame.pose = pose;
@@ -56,6 +61,26 @@ bool RgbdOdometryPoses::estimate(Frame& frame) {
     reference_pose_ = pose;
   }
   return true;
+}
+
+std::optional<Eigen::Isometry3d> RgbdOdometryPoses::plausible(
+    const cv::Mat& Rt, const Eigen::Isometry3d& guess) const {
+  Eigen::Matrix4d rt;
+  cv::cv2eigen(Rt, rt);
+  if (!rt.allFinite()) return std::nullopt;
+  const Eigen::Matrix3d r = rt.topLeftCorner<3, 3>();
+  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-3)
+    return std::nullopt;
+  Eigen::Isometry3d relative = Eigen::Isometry3d::Identity();
+  // Re-orthonormalised, so rounding does not accumulate into a non-rigid pose over many frames.
+  relative.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
+  relative.translation() = rt.topRightCorner<3, 1>();
+  // guess places the current camera in the reference frame; relative is its estimated inverse.
+  const Eigen::Isometry3d jump = guess.inverse() * relative.inverse();
+  if (jump.translation().norm() > options_.max_jump_translation ||
+      Eigen::AngleAxisd(jump.linear()).angle() > options_.max_jump_rotation)
+    return std::nullopt;
+  return relative;
 }
 
 }  // namespace rgbdmap

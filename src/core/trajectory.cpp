@@ -16,7 +16,8 @@ Trajectory Trajectory::load(const std::string& path) {
   Trajectory trajectory;
   for (const TextLine& line : readTextLines(path)) {
     if (line.fields.size() != 8)
-      throw InputError(where(path, line.number) + ": expected 8 fields (timestamp tx ty tz qx qy qz qw), found " +
+      throw InputError(where(path, line.number) +
+                       ": expected 8 fields (timestamp tx ty tz qx qy qz qw), found " +
                        std::to_string(line.fields.size()));
     static const char* kNames[] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
     double v[8];
@@ -47,7 +48,7 @@ void Trajectory::save(const std::string& path) const {
     if (!out) throw std::runtime_error(tmp + ": cannot open for writing");
     out << "# timestamp tx ty tz qx qy qz qw\n" << std::fixed;
     for (const StampedPose& p : poses_) {
-      const Eigen::Quaterniond q(p.pose.linear());
+      const Eigen::Quaterniond q = Eigen::Quaterniond(p.pose.linear()).normalized();
       const Eigen::Vector3d t = p.pose.translation();
       out << std::setprecision(6) << p.timestamp << std::setprecision(7) << ' ' << t.x() << ' '
           << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w()
@@ -64,8 +65,9 @@ void Trajectory::save(const std::string& path) const {
 
 std::optional<Eigen::Isometry3d> Trajectory::interpolate(double t, double max_gap) const {
   if (poses_.empty()) return std::nullopt;
-  const auto after = std::lower_bound(poses_.begin(), poses_.end(), t,
-                                      [](const StampedPose& p, double s) { return p.timestamp < s; });
+  const auto after =
+      std::lower_bound(poses_.begin(), poses_.end(), t,
+                       [](const StampedPose& p, double s) { return p.timestamp < s; });
   if (after != poses_.end() && after->timestamp == t) return after->pose;
   if (after == poses_.begin() || after == poses_.end()) return std::nullopt;
   const StampedPose& b = *after;

@@ -1,0 +1,88 @@
+// Tracking without ground truth (what a live camera gets): RGB-D odometry on a synthetic room
+// and on the real fr1/xyz frames, scored with TUM's ATE/RPE, and the map it builds scored
+// against the exact geometry once aligned.
+#include <gtest/gtest.h>
+#include <pcl/common/transforms.h>
+
+#include <iostream>
+#include <regex>
+
+#include "rgbdmap/map_evaluation.hpp"
+#include "rgbdmap/trajectory.hpp"
+#include "rgbdmap/trajectory_evaluation.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+constexpr int kFrames = 150;  // 5 s: a third of a circle around the room
+
+double jsonNumber(const std::string& json, const std::string& key) {
+  const std::regex pattern("\"" + key + "\":\\s*([-+0-9.eE]+)");
+  std::smatch match;
+  if (!std::regex_search(json, match, pattern)) {
+    ADD_FAILURE() << "no \"" << key << "\" in " << json;
+    return -1;
+  }
+  return std::stod(match[1]);
+}
+
+// Maps `source` with odometry, every frame a keyframe; returns the run's --stats JSON.
+std::string mapWithOdometry(const std::string& source, const std::string& dir) {
+  std::string output;
+  EXPECT_EQ(test::run(test::binary() + " --source " + source + " --out " + dir +
+                          "/map.pcd --rate max --set pose.source=odometry "
+                          "--set keyframe.every_n=1 -q --no-render --stats " +
+                          dir + "/stats.json",
+                      &output),
+            0)
+      << output;
+  return test::readFile(dir + "/stats.json");
+}
+
+TEST(Odometry, TracksASyntheticRoomToMillimetres) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " synth --out " + dir + "/room --frames " +
+                          std::to_string(kFrames),
+                      &output),
+            0)
+      << output;
+  const std::string stats = mapWithOdometry("tum:" + dir + "/room", dir);
+  EXPECT_EQ(jsonNumber(stats, "keyframes"), kFrames) << "frames lost by tracking: " << stats;
+
+  const Trajectory estimate = Trajectory::load(dir + "/map_keyframes.txt");
+  const Trajectory groundtruth = Trajectory::load(dir + "/room/groundtruth.txt");
+  const AbsoluteTrajectoryError ate = absoluteTrajectoryError(estimate, groundtruth);
+  const RelativePoseError rpe = relativePoseError(estimate, groundtruth);
+  std::cout << "ATE rmse " << ate.translation.rmse << " m, RPE 1 s " << rpe.translation.rmse
+            << " m " << rpe.rotation.rmse << " deg\n";
+  EXPECT_LT(ate.translation.rmse, 0.015);
+  EXPECT_LT(rpe.translation.rmse, 0.01);
+  EXPECT_LT(rpe.rotation.rmse, 0.5);
+
+  // The map lives in the first camera's frame: bring it into the scene's with the ATE alignment.
+  pcl::PointCloud<pcl::PointXYZRGB> map = loadMapFile(dir + "/map.pcd");
+  pcl::transformPointCloud(map, map, ate.alignment.matrix().cast<float>());
+  const SyntheticGroundTruth truth = loadSyntheticGroundTruth(dir + "/room");
+  const MapScore score = evaluateMap(map, truth.scene, truth.visible_surface, 0.01);
+  std::cout << score.toJson() << "\n";
+  EXPECT_GE(score.precision, 0.8);
+  EXPECT_GE(score.recall, 0.9);
+  EXPECT_LT(score.median_distance, 0.005);
+}
+
+TEST(Odometry, TracksTheRealFr1XyzFrames) {
+  const std::string dir = test::freshDir();
+  const std::string folder = test::tumDir("rgbd_dataset_freiburg1_xyz");
+  const std::string stats = mapWithOdometry("tum:" + folder, dir);
+  EXPECT_EQ(jsonNumber(stats, "keyframes"), 32) << stats;
+  const Trajectory estimate = Trajectory::load(dir + "/map_keyframes.txt");
+  const AbsoluteTrajectoryError ate =
+      absoluteTrajectoryError(estimate, Trajectory::load(folder + "/groundtruth.txt"));
+  std::cout << "ATE rmse " << ate.translation.rmse << " m\n";
+  EXPECT_LT(ate.translation.rmse, 0.02);
+}
+
+}  // namespace
+}  // namespace rgbdmap
