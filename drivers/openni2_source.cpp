@@ -11,6 +11,7 @@
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <thread>
+#include <vector>
 
 #include "rgbdmap/error.hpp"
 #include "rgbdmap/usb_cameras.hpp"
@@ -154,6 +155,28 @@ class DisconnectWatch : public openni::OpenNI::DeviceDisconnectedListener {
   std::atomic<bool> disconnected_{false};
 };
 
+// The OpenNI2 objects of one open device. The runtime reference comes first, so OpenNI2 shuts
+// down only after the device is closed.
+struct OpenDevice {
+  std::shared_ptr<OpenNI2Runtime> runtime;
+  openni::Device device;
+  openni::VideoStream depth;
+  openni::VideoStream color;
+  openni::VideoFrameRef depth_frame;
+  openni::VideoFrameRef color_frame;
+};
+
+// Recordings that have been played, left open until the process ends. Debian's OniFile driver
+// crashes in its player thread about one time in ten when a recording is closed (or OpenNI2 shut
+// down after one); never closing them, and so never shutting OpenNI2 down, avoids it. The list
+// is never freed (reachable from here, so leak checkers do not count it).
+void keepOpenUntilExit(std::unique_ptr<OpenDevice> device) {
+  static std::mutex mutex;
+  static auto *kept = new std::vector<std::unique_ptr<OpenDevice>>();
+  std::lock_guard<std::mutex> lock(mutex);
+  kept->push_back(std::move(device));
+}
+
 class OpenNI2Source : public FrameSource {
  public:
   OpenNI2Source(const std::string &uri_or_file, const Config &config)
@@ -207,11 +230,7 @@ class OpenNI2Source : public FrameSource {
   bool is_file_ = false;
   bool open_ = false;
   bool ever_opened_ = false;
-  openni::Device device_;
-  openni::VideoStream depth_;
-  openni::VideoStream color_;
-  openni::VideoFrameRef depth_frame_;
-  openni::VideoFrameRef color_frame_;
+  std::unique_ptr<OpenDevice> dev_;  // null while closed
   std::unique_ptr<DisconnectWatch> watch_;
 
   double metres_per_unit_ = 0.001;
@@ -251,7 +270,12 @@ std::string OpenNI2Source::openFailure(const std::string &uri, bool diagnose) co
 
 void OpenNI2Source::open(const std::string &uri, bool diagnose) {
   const char *target = uri.empty() ? openni::ANY_DEVICE : uri.c_str();
-  if (device_.open(target) != openni::STATUS_OK) throw InputError(openFailure(uri, diagnose));
+  dev_ = std::make_unique<OpenDevice>();
+  dev_->runtime = runtime_;
+  if (dev_->device.open(target) != openni::STATUS_OK) {
+    dev_.reset();
+    throw InputError(openFailure(uri, diagnose));
+  }
   try {
     configure();
   } catch (...) {
@@ -263,18 +287,19 @@ void OpenNI2Source::open(const std::string &uri, bool diagnose) {
 }
 
 void OpenNI2Source::configure() {
-  const openni::DeviceInfo &info = device_.getDeviceInfo();
-  is_file_ = device_.isFile();
+  const openni::DeviceInfo &info = dev_->device.getDeviceInfo();
+  is_file_ = dev_->device.isFile();
   uri_ = info.getUri();
   label_ = "openni2:" + (is_file_ ? requested_ : uri_);
   name_ =
       is_file_ ? std::string("recording") : std::string(info.getVendor()) + " " + info.getName();
-  if (!device_.hasSensor(openni::SENSOR_DEPTH)) throw InputError(label() + ": has no depth stream");
-  if (!device_.hasSensor(openni::SENSOR_COLOR))
+  if (!dev_->device.hasSensor(openni::SENSOR_DEPTH))
+    throw InputError(label() + ": has no depth stream");
+  if (!dev_->device.hasSensor(openni::SENSOR_COLOR))
     throw InputError(label() + ": has no colour stream");
-  if (depth_.create(device_, openni::SENSOR_DEPTH) != openni::STATUS_OK)
+  if (dev_->depth.create(dev_->device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
     throw InputError(label() + ": cannot create the depth stream (" + openni2Error() + ")");
-  if (color_.create(device_, openni::SENSOR_COLOR) != openni::STATUS_OK)
+  if (dev_->color.create(dev_->device, openni::SENSOR_COLOR) != openni::STATUS_OK)
     throw InputError(label() + ": cannot create the colour stream (" + openni2Error() + ")");
   if (is_file_) {
     setUpPlayback();
@@ -293,9 +318,9 @@ void OpenNI2Source::configure() {
       watch_.reset();
     }
   }
-  if (depth_.start() != openni::STATUS_OK)
+  if (dev_->depth.start() != openni::STATUS_OK)
     throw InputError(label() + ": cannot start the depth stream (" + openni2Error() + ")");
-  if (color_.start() != openni::STATUS_OK)
+  if (dev_->color.start() != openni::STATUS_OK)
     throw InputError(label() + ": cannot start the colour stream (" + openni2Error() + ")");
   checkVideoModes();
   const CameraIntrinsics camera = intrinsicsFromDevice();
@@ -337,18 +362,19 @@ void OpenNI2Source::chooseVideoModes() {
   const std::string size =
       std::to_string(config_camera_.width) + "x" + std::to_string(config_camera_.height);
   const openni::VideoMode *depth_mode =
-      pick(depth_, {openni::PIXEL_FORMAT_DEPTH_100_UM, openni::PIXEL_FORMAT_DEPTH_1_MM});
+      pick(dev_->depth, {openni::PIXEL_FORMAT_DEPTH_100_UM, openni::PIXEL_FORMAT_DEPTH_1_MM});
   if (!depth_mode)
     throw InputError(label() + ": no " + size + " depth mode in DEPTH_100_UM or DEPTH_1_MM (it " +
-                     "offers " + offered(depth_) + "); set camera.width/height to one of them");
-  const openni::VideoMode *color_mode = pick(color_, {openni::PIXEL_FORMAT_RGB888});
+                     "offers " + offered(dev_->depth) +
+                     "); set camera.width/height to one of them");
+  const openni::VideoMode *color_mode = pick(dev_->color, {openni::PIXEL_FORMAT_RGB888});
   if (!color_mode)
     throw InputError(label() + ": no " + size + " RGB888 colour mode (it offers " +
-                     offered(color_) + "); set camera.width/height to one of them");
-  if (depth_.setVideoMode(*depth_mode) != openni::STATUS_OK)
+                     offered(dev_->color) + "); set camera.width/height to one of them");
+  if (dev_->depth.setVideoMode(*depth_mode) != openni::STATUS_OK)
     throw InputError(label() + ": cannot set depth " + size + " " +
                      formatName(depth_mode->getPixelFormat()) + " (" + openni2Error() + ")");
-  if (color_.setVideoMode(*color_mode) != openni::STATUS_OK)
+  if (dev_->color.setVideoMode(*color_mode) != openni::STATUS_OK)
     throw InputError(label() + ": cannot set colour " + size + " RGB888 (" + openni2Error() + ")");
   if (depth_mode->getFps() != kFps || color_mode->getFps() != kFps)
     spdlog::warn("{}: no {} fps mode; streaming depth at {} fps and colour at {} fps", label(),
@@ -361,16 +387,17 @@ void OpenNI2Source::setUpRegistrationAndSync() {
         "{}: a recording plays as it was recorded (depth-to-colour "
         "registration {})",
         label(),
-        device_.getImageRegistrationMode() == openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR
+        dev_->device.getImageRegistrationMode() == openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR
             ? "on"
             : "off or not recorded");
-  } else if (!device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
+  } else if (!dev_->device.isImageRegistrationModeSupported(
+                 openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
     spdlog::warn(
         "{}: the device cannot register depth to colour: depth and colour "
         "pixels are "
         "misaligned by up to a few centimetres and colours bleed at edges",
         label());
-  } else if (device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) !=
+  } else if (dev_->device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) !=
              openni::STATUS_OK) {
     spdlog::warn(
         "{}: depth-to-colour registration failed to turn on ({}): "
@@ -380,7 +407,7 @@ void OpenNI2Source::setUpRegistrationAndSync() {
   } else {
     spdlog::info("{}: depth registered to colour by the device", label());
   }
-  if (device_.setDepthColorSyncEnabled(true) != openni::STATUS_OK)
+  if (dev_->device.setDepthColorSyncEnabled(true) != openni::STATUS_OK)
     spdlog::warn(
         "{}: depth/colour frame sync is not supported ({}): each "
         "depth image is paired "
@@ -392,7 +419,7 @@ void OpenNI2Source::setUpRegistrationAndSync() {
 // is skipped however slowly the mapper reads; replay.rate timing is applied
 // here, in read().
 void OpenNI2Source::setUpPlayback() {
-  openni::PlaybackControl *playback = device_.getPlaybackControl();
+  openni::PlaybackControl *playback = dev_->device.getPlaybackControl();
   if (!playback || !playback->isValid())
     throw InputError(label() + ": OpenNI2 gives no playback control for this recording");
   if (playback->setSpeed(-1.0f) != openni::STATUS_OK)
@@ -404,8 +431,8 @@ void OpenNI2Source::setUpPlayback() {
         "{} s without a "
         "frame",
         label(), openni2Error(), kReadTimeout.count() / 1000.0);
-  depth_total_ = std::max(playback->getNumberOfFrames(depth_), 0);
-  color_total_ = std::max(playback->getNumberOfFrames(color_), 0);
+  depth_total_ = std::max(playback->getNumberOfFrames(dev_->depth), 0);
+  color_total_ = std::max(playback->getNumberOfFrames(dev_->color), 0);
   if (depth_total_ == 0 || color_total_ == 0)
     throw InputError(label() + ": the recording has " + std::to_string(depth_total_) +
                      " depth and " + std::to_string(color_total_) +
@@ -413,8 +440,8 @@ void OpenNI2Source::setUpPlayback() {
 }
 
 void OpenNI2Source::checkVideoModes() {
-  const openni::VideoMode depth = depth_.getVideoMode();
-  const openni::VideoMode color = color_.getVideoMode();
+  const openni::VideoMode depth = dev_->depth.getVideoMode();
+  const openni::VideoMode color = dev_->color.getVideoMode();
   if (depth.getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_1_MM)
     metres_per_unit_ = 0.001;
   else if (depth.getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM)
@@ -440,7 +467,7 @@ void OpenNI2Source::checkVideoModes() {
 // Colour's view is preferred since depth is registered to it; the depth
 // stream's serves when colour reports none.
 CameraIntrinsics OpenNI2Source::intrinsicsFromDevice() {
-  const openni::VideoMode mode = depth_.getVideoMode();
+  const openni::VideoMode mode = dev_->depth.getVideoMode();
   const int width = mode.getResolutionX();
   const int height = mode.getResolutionY();
   if (!intrinsics_from_device_) {
@@ -454,12 +481,12 @@ CameraIntrinsics OpenNI2Source::intrinsicsFromDevice() {
     return config_camera_;
   }
   auto valid = [](float fov) { return std::isfinite(fov) && fov > 0.01f && fov < 3.1f; };
-  float hfov = color_.getHorizontalFieldOfView();
-  float vfov = color_.getVerticalFieldOfView();
+  float hfov = dev_->color.getHorizontalFieldOfView();
+  float vfov = dev_->color.getVerticalFieldOfView();
   const char *from = "colour";
   if (!valid(hfov) || !valid(vfov)) {
-    hfov = depth_.getHorizontalFieldOfView();
-    vfov = depth_.getVerticalFieldOfView();
+    hfov = dev_->depth.getHorizontalFieldOfView();
+    vfov = dev_->depth.getVerticalFieldOfView();
     from = "depth";
   }
   if (!valid(hfov) || !valid(vfov))
@@ -486,18 +513,20 @@ void OpenNI2Source::close() {
     openni::OpenNI::removeDeviceDisconnectedListener(watch_.get());
     watch_.reset();
   }
-  depth_frame_.release();
-  color_frame_.release();
-  if (depth_.isValid()) {
-    depth_.stop();
-    depth_.destroy();
-  }
-  if (color_.isValid()) {
-    color_.stop();
-    color_.destroy();
-  }
-  if (device_.isValid()) device_.close();
   open_ = false;
+  if (!dev_) return;
+  dev_->depth_frame.release();
+  dev_->color_frame.release();
+  if (dev_->depth.isValid()) dev_->depth.stop();
+  if (dev_->color.isValid()) dev_->color.stop();
+  if (dev_->device.isValid() && dev_->device.isFile()) {
+    keepOpenUntilExit(std::move(dev_));
+    return;
+  }
+  if (dev_->depth.isValid()) dev_->depth.destroy();
+  if (dev_->color.isValid()) dev_->color.destroy();
+  if (dev_->device.isValid()) dev_->device.close();
+  dev_.reset();
 }
 
 std::string OpenNI2Source::describe() const {
@@ -513,7 +542,7 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
   if (!open_)
     return ReadStatus::kTimeout;  // still unplugged: reconnect() has not
                                   // succeeded
-  openni::VideoStream *streams[] = {&depth_, &color_};
+  openni::VideoStream *streams[] = {&dev_->depth, &dev_->color};
   bool have_depth = false;
   bool have_color = false;
   bool wrong_size = false;
@@ -548,8 +577,8 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
       continue;
     }
-    openni::VideoStream &stream = ready == 0 ? depth_ : color_;
-    openni::VideoFrameRef &ref = ready == 0 ? depth_frame_ : color_frame_;
+    openni::VideoStream &stream = ready == 0 ? dev_->depth : dev_->color;
+    openni::VideoFrameRef &ref = ready == 0 ? dev_->depth_frame : dev_->color_frame;
     if (stream.readFrame(&ref) != openni::STATUS_OK || !ref.isValid()) continue;
     const int width = ref.getWidth();
     const int height = ref.getHeight();
@@ -578,8 +607,8 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
     spdlog::warn(
         "{}: skipping a frame of {}x{} (depth) / {}x{} (colour); the "
         "camera is {}x{}",
-        label(), depth_frame_.getWidth(), depth_frame_.getHeight(), color_frame_.getWidth(),
-        color_frame_.getHeight(), camera_.width, camera_.height);
+        label(), dev_->depth_frame.getWidth(), dev_->depth_frame.getHeight(),
+        dev_->color_frame.getWidth(), dev_->color_frame.getHeight(), camera_.width, camera_.height);
     ++skipped_;
     return ReadStatus::kSkipped;
   }

@@ -69,12 +69,12 @@ int Pipeline::run(RunControl& control) {
   }
 
   FrameQueue queue(static_cast<std::size_t>(config_.queue_capacity),
-                   source_->isLive() ? QueuePolicy::kDropOldest : QueuePolicy::kBlock,
-                   camera.width, camera.height);
+                   source_->isLive() ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
+                   camera.height);
   CheckpointWriter writer([this](const CheckpointWriter::Result& r) {
     if (r.ok) {
       stats_.checkpoints_written.fetch_add(1);
-      spdlog::debug("checkpoint: {} points to {} in {:.2f} s", r.points, r.path, r.seconds);
+      spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
     } else {
       stats_.checkpoints_failed.fetch_add(1);
       spdlog::error("checkpoint failed, mapping goes on: {}", r.error);
@@ -102,15 +102,18 @@ int Pipeline::run(RunControl& control) {
           // Keep everything mapped: checkpoint now, then wait for the same camera.
           stats_.disconnects.fetch_add(1);
           control.snapshot.store(true);
-          spdlog::warn("{}: camera stopped delivering frames; map checkpointed, waiting for it "
-                       "to come back (Ctrl-C saves and quits)",
-                       source_->describe());
+          spdlog::warn(
+              "{}: camera stopped delivering frames; map checkpointed, waiting for it "
+              "to come back (Ctrl-C saves and quits)",
+              source_->describe());
           while (!control.stop.load() && !source_->reconnect()) {
           }
-          if (!control.stop.load()) spdlog::info("{}: camera is back, mapping resumes", source_->describe());
+          if (!control.stop.load())
+            spdlog::info("{}: camera is back, mapping resumes", source_->describe());
           continue;
         }
-        stats_.read_latency.record(std::chrono::duration<double>(Clock::now() - read_start).count());
+        stats_.read_latency.record(
+            std::chrono::duration<double>(Clock::now() - read_start).count());
         frame->index = index++;
         frame->captured_at = now();
         stats_.frames_captured.fetch_add(1);
