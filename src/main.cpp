@@ -1,9 +1,11 @@
 // rgbdmap: map a room with an RGB-D camera (or a TUM sequence replayed as one)
 // into a coloured point cloud, checkpointed while it runs.
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <filesystem>
 #include <fstream>
 #include <thread>
 
@@ -96,6 +98,21 @@ struct MapOptions {
   bool list_keys = false;
 };
 
+// The map's folder is created if missing and must be writable: better to refuse at once than to
+// find out at the first checkpoint, after mapping for a while.
+void checkOutputFolder(const std::string &map_path) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::path(map_path).parent_path();
+  if (folder.empty()) return;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec) && !fs::create_directories(folder, ec))
+    throw rgbdmap::InputError("--out " + map_path + ": cannot create the folder " +
+                              folder.string() + (ec ? " (" + ec.message() + ")" : ""));
+  if (::access(folder.c_str(), W_OK) != 0)
+    throw rgbdmap::InputError("--out " + map_path + ": the folder " + folder.string() +
+                              " is not writable");
+}
+
 int runMapping(const MapOptions &o) {
   using namespace rgbdmap;
   Config config;
@@ -111,6 +128,7 @@ int runMapping(const MapOptions &o) {
         "`rgbdmap synth --out DIR` makes a sequence to try");
     return 2;
   }
+  checkOutputFolder(o.out);
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string &s : o.sets) {

@@ -180,11 +180,13 @@ TEST(BadInput, UnwritableOutputIsReportedNotCrashed) {
       test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) +
                     " --out /proc/rgbdmap-no-such-dir/map.pcd --rate max -q --no-render",
                 &output);
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("final map not saved: "
-                        "/proc/rgbdmap-no-such-dir/map.pcd: cannot write map"),
+  // Refused before mapping starts, naming the folder.
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("--out /proc/rgbdmap-no-such-dir/map.pcd: cannot create the folder "
+                        "/proc/rgbdmap-no-such-dir"),
             std::string::npos)
       << output;
+  EXPECT_EQ(output.find("source:"), std::string::npos) << "the source was opened: " << output;
 }
 
 TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
