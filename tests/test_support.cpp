@@ -1,13 +1,15 @@
 #include "test_support.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <pcl/io/pcd_io.h>
-#include <fcntl.h>
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <regex>
 
 namespace rgbdmap::test {
 
@@ -17,8 +19,8 @@ std::string binary() { return RGBDMAP_BINARY; }
 
 std::string freshDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir = std::string(RGBDMAP_TEST_TMP) + "/" + info->test_suite_name() + "." +
-                          info->name();
+  const std::string dir =
+      std::string(RGBDMAP_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -29,7 +31,8 @@ int run(const std::string& command, std::string* output) {
   if (!pipe) return -1;
   std::array<char, 4096> buffer{};
   std::string text;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) text.append(buffer.data(), n);
+  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe))
+    text.append(buffer.data(), n);
   const int status = ::pclose(pipe);
   if (output) *output = text;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
@@ -41,6 +44,16 @@ MapCloud loadMap(const std::string& path) {
   MapCloud cloud;
   EXPECT_EQ(pcl::io::loadPCDFile(path, cloud), 0) << path;
   return cloud;
+}
+
+double jsonNumber(const std::string& json, const std::string& key) {
+  const std::regex pattern("\"" + key + "\":\\s*([-+0-9.eE]+)");
+  std::smatch match;
+  if (!std::regex_search(json, match, pattern)) {
+    ADD_FAILURE() << "no \"" << key << "\" in " << json;
+    return std::nan("");
+  }
+  return std::stod(match[1]);
 }
 
 }  // namespace rgbdmap::test
@@ -127,7 +140,8 @@ std::string copySequence(const std::string& source, const std::string& target) {
   fs::create_directories(target);
   for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"})
     fs::copy_file(source + "/" + list, target + "/" + list, fs::copy_options::overwrite_existing);
-  for (const char* folder : {"rgb", "depth"}) fs::create_directory_symlink(source + "/" + folder, target + "/" + folder);
+  for (const char* folder : {"rgb", "depth"})
+    fs::create_directory_symlink(source + "/" + folder, target + "/" + folder);
   return target;
 }
 

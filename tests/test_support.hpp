@@ -44,6 +44,9 @@ class Process {
 };
 
 std::string readFile(const std::string& path);
+// A number from flat JSON ("key": value, as --stats and `evaluate --json` write); a test failure
+// and NaN when the key is missing.
+double jsonNumber(const std::string& json, const std::string& key);
 // Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
 std::string copySequence(const std::string& source, const std::string& target);
 
