@@ -47,8 +47,7 @@ KeyframeIntegrator::KeyframeIntegrator(const Config& config)
 
 void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {
   const auto start = std::chrono::steady_clock::now();
-  frame.depth.copyTo(depth_);
-  filter_.apply(depth_, scratch_);
+  filter_.apply(frame.depth, depth_, scratch_);  // the frame stays untouched
   smoother_.apply(depth_, inverse_, valid_, sum_, count_, low_, high_);
   stats.filter_latency.record(secondsSince(start));
 
