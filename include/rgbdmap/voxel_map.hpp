@@ -58,16 +58,23 @@ class VoxelMap {
     std::uint32_t observations = 0;  // points fused into this voxel
   };
 
-  explicit VoxelMap(double voxel_size);
+  // Voxels that received fewer than min_observations points are kept (more may come) but not
+  // extracted: with many frames, a voxel holding a single point is almost always a noise tail.
+  explicit VoxelMap(double voxel_size, std::uint32_t min_observations = 1);
 
   void integrate(const PointBatch& batch);
 
-  std::size_t size() const { return voxels_.size(); }
+  std::size_t size() const { return voxels_.size(); }  // every voxel
+  std::size_t pointCount() const { return points_; }   // voxels extract() writes
+  std::uint32_t minObservations() const { return min_observations_; }
   double voxelSize() const { return voxel_size_; }
   std::uint64_t rejectedPoints() const { return rejected_; }
-  // One point per voxel observed at least min_observations times, in a deterministic order
-  // (the order the voxels were created in).
-  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud, std::uint32_t min_observations = 1) const;
+  // One point per voxel observed at least min_observations times (the map's own by default), in
+  // a deterministic order (the order the voxels were created in).
+  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
+    extract(cloud, min_observations_);
+  }
+  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud, std::uint32_t min_observations) const;
   // Every voxel, in the order they were created.
   const std::vector<Voxel>& voxels() const { return voxels_; }
 
@@ -87,6 +94,8 @@ class VoxelMap {
 
   double voxel_size_;
   float inv_voxel_size_;
+  std::uint32_t min_observations_;
+  std::size_t points_ = 0;  // voxels with at least min_observations_ points
   tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // key -> blocks_
   std::vector<Block> blocks_;
   std::vector<Voxel> voxels_;

@@ -23,8 +23,10 @@ bool voxelIndex(const Eigen::Vector3f& p, float inv_voxel_size, std::uint64_t in
 
 }  // namespace
 
-VoxelMap::VoxelMap(double voxel_size)
-    : voxel_size_(voxel_size), inv_voxel_size_(static_cast<float>(1.0 / voxel_size)) {}
+VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
+    : voxel_size_(voxel_size),
+      inv_voxel_size_(static_cast<float>(1.0 / voxel_size)),
+      min_observations_(std::max<std::uint32_t>(min_observations, 1)) {}
 
 bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
   std::uint64_t index[3];
@@ -102,7 +104,7 @@ void VoxelMap::integrate(const PointBatch& batch) {
     const float alpha = w / v.weight;
     v.position += alpha * (batch.positions[i] - v.position);
     v.color += alpha * (batch.colors[i] - v.color);
-    ++v.observations;
+    if (++v.observations == min_observations_) ++points_;
   }
 }
 
