@@ -43,6 +43,7 @@ void DepthSmoother::apply(cv::Mat& depth, cv::Mat& inverse, cv::Mat& valid, cv::
   cv::divide(count, sum, sum);
   const float min_count = static_cast<float>(min_valid_fraction) * window_pixels;
   const float range = static_cast<float>(max_relative_range);
+  const float fallback = drop_unsmoothed ? 0.0f : 1.0f;
   for (int v = 0; v < depth.rows; ++v) {
     float* z = depth.ptr<float>(v);
     const float* mean = sum.ptr<float>(v);
@@ -54,7 +55,7 @@ void DepthSmoother::apply(cv::Mat& depth, cv::Mat& inverse, cv::Mat& valid, cv::
       // read unconditionally, so the compiler vectorises the loop.)
       const float measured = z[u], smoothed = mean[u];
       const bool enough = n[u] >= min_count, flat = hi[u] - lo[u] <= range * measured;
-      z[u] = ((measured > 0.0f) & enough & flat) ? smoothed : measured;
+      z[u] = ((measured > 0.0f) & enough & flat) ? smoothed : fallback * measured;
     }
   }
 }

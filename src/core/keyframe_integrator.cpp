@@ -27,7 +27,8 @@ DepthFilter makeFilter(const Config& c) {
 
 KeyframeIntegrator::KeyframeIntegrator(const Config& config)
     : filter_(makeFilter(config)),
-      smoother_{config.smooth_radius, config.edge_jump, 0.75},
+      // Fusion averages many views of each surface, so unsmoothable pixels are dropped.
+      smoother_{config.smooth_radius, config.edge_jump, 0.75, true},
       projector_(config.camera, config.undistort),
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
