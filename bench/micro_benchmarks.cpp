@@ -81,6 +81,7 @@ struct Fixture {
     rgbdmap::DepthSmoother s;
     s.radius = config.smooth_radius;
     s.max_relative_range = config.edge_jump;
+    s.drop_unsmoothed = true;
     return s;
   }
   rgbdmap::BackProjector projector(bool subsample = true) const {

@@ -90,6 +90,8 @@ notes="$work_dir/notes.txt"
 failures=0
 
 note() { echo "$*" >>"$notes"; echo "run.sh: $*" >&2; }
+load() { echo "machine load $1: $(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo '?') (1, 5, 15 min averages, $(getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?') cores)" >>"$notes"; }
+load "at start"
 
 # Seconds since the epoch with sub-second resolution (bash 5's EPOCHREALTIME, else GNU date).
 now() {
@@ -213,7 +215,6 @@ run_rgbdmap() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
   t1=$(now)
   local quality
   quality=$(if [ -n "$scene" ]; then evaluate_map "$base.pcd" "$scene" "$base-eval.json"; else echo "- -"; fi)
-  # rgbdmap's latency histograms give p50/p90/p99; p95 only once its JSON carries p95_ms.
   add_row "$scenario" "$label" \
     "$(json_number "$base.json" frames_processed)" "$(json_number "$base.json" keyframes)" \
     "$(elapsed "$t0" "$t1")" "$(json_number "$base.json" frames_per_second)" \
@@ -275,6 +276,7 @@ if [ "$have_synth" = 1 ]; then
 fi
 
 # --- the table --------------------------------------------------------------------------------
+load "at end"
 table="$work_dir/table.txt"
 awk -F '\t' '
   function num(x) { return x ~ /^-?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?$/ }
@@ -317,8 +319,7 @@ script; frames/s and kf ms (per-keyframe integration time) as each program repor
 peak RSS: VmHWM. F@1cm / mean mm: map against the exact synthetic geometry (rgbdmap evaluate).
 Ratios are against the original method in the same scenario of this invocation: fps x = frames/s
 ratio, kf speed-up = original kf ms p50 / this kf ms p50, RSS x = peak RSS ratio.
-rgbdmap reports latency percentiles p50/p90/p99 only, so its p95 shows '-' until its --stats
-JSON has p95_ms."
+The machine load (uptime) before and after the run is in the notes: compare ratios, not times."
 
 cat "$table"
 echo

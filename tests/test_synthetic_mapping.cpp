@@ -4,8 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <regex>
+#include <sstream>
 
 #include "test_support.hpp"
 
@@ -77,12 +81,13 @@ MappingResult synthMapEvaluate(const std::string& dir, int every_n) {
 TEST(SyntheticMapping, EveryFrameMapsTheVisibleSurfaceWithinMillimetres) {
   const std::string dir = test::freshDir();
   const MappingResult r = synthMapEvaluate(dir, 1);
-  EXPECT_LT(r.median_mm, 2.0);
-  EXPECT_LT(r.mean_mm, 3.0);
-  EXPECT_LT(r.p95_mm, 5.0);
-  EXPECT_GE(r.precision, 0.95);
-  EXPECT_GE(r.recall, 0.97);
-  EXPECT_GE(r.f_score, 0.96);
+  // Measured: P 1.000, R 0.998, F 0.999, mean 0.73 mm (issue 3 asks F >= 0.99, mean <= 2 mm).
+  EXPECT_LT(r.median_mm, 1.5);
+  EXPECT_LT(r.mean_mm, 1.5);
+  EXPECT_LT(r.p95_mm, 3.0);
+  EXPECT_GE(r.precision, 0.99);
+  EXPECT_GE(r.recall, 0.98);
+  EXPECT_GE(r.f_score, 0.985);
 
   // The keyframe poses written beside the map are the interpolated ground truth; TUM's ATE
   // pairs them with the nearest 100 Hz sample (no interpolation), so a few millimetres remain.
@@ -103,11 +108,75 @@ TEST(SyntheticMapping, EveryFrameMapsTheVisibleSurfaceWithinMillimetres) {
 TEST(SyntheticMapping, EveryTenthFrameStillCoversMostOfTheSurface) {
   const std::string dir = test::freshDir();
   const MappingResult r = synthMapEvaluate(dir, 10);
-  EXPECT_LT(r.median_mm, 2.0);
-  EXPECT_LT(r.mean_mm, 3.0);
-  EXPECT_GE(r.precision, 0.95);
-  EXPECT_GE(r.recall, 0.85);
-  EXPECT_GE(r.f_score, 0.9);
+  // Measured: P 1.000, R 0.952, F 0.976, mean 0.68 mm (issue 3 asks F >= 0.95).
+  EXPECT_LT(r.median_mm, 1.5);
+  EXPECT_LT(r.mean_mm, 1.5);
+  EXPECT_GE(r.precision, 0.99);
+  EXPECT_GE(r.recall, 0.92);
+  EXPECT_GE(r.f_score, 0.955);
+}
+
+// Writes `list` (a TUM list: comment lines, then "timestamp rest") to `out` twice: as it is, then
+// with every timestamp moved `shift` seconds later, so the same frames are read a second time.
+void writeTwice(const std::string& list, const std::string& out, double shift) {
+  std::ifstream in(list);
+  std::ofstream twice(out);
+  std::string line, comments, entries, shifted;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') {
+      comments += line + "\n";
+      continue;
+    }
+    std::istringstream fields(line);
+    double stamp = 0;
+    std::string rest;
+    fields >> stamp;
+    std::getline(fields, rest);
+    char moved[64];
+    std::snprintf(moved, sizeof moved, "%.6f", stamp + shift);
+    entries += line + "\n";
+    shifted += moved + rest + "\n";
+  }
+  twice << comments << entries << shifted;
+}
+
+long mapPoints(const std::string& stats_json) {
+  return static_cast<long>(jsonNumber(test::readFile(stats_json), "map_points"));
+}
+
+TEST(SyntheticMapping, ASecondPassOverTheSameFramesDoesNotGrowTheMap) {
+  // Issue 3, target 5: revisiting what is mapped adds no points. The same frames (same images,
+  // same poses, 1000 s later) are replayed after themselves; the map must keep its size.
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " synth --frames 40 --out " + dir + "/once", &output), 0)
+      << output;
+  namespace fs = std::filesystem;
+  fs::create_directory(dir + "/twice");
+  for (const char* folder : {"rgb", "depth"})
+    fs::create_directory_symlink(fs::absolute(dir + "/once/" + folder), dir + "/twice/" + folder);
+  for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"})
+    writeTwice(dir + "/once/" + list, dir + "/twice/" + list, 1000.0);
+
+  for (const int every_n : {1, 5}) {
+    long points[2] = {0, 0};
+    int i = 0;
+    for (const char* sequence : {"once", "twice"}) {
+      const std::string stats = dir + "/" + sequence + ".json";
+      ASSERT_EQ(test::run(test::binary() + " --source tum:" + dir + "/" + sequence + " --out " +
+                              dir + "/" + sequence + ".pcd --rate max -q --no-render --stats " +
+                              stats + " --set keyframe.every_n=" + std::to_string(every_n),
+                          &output),
+                0)
+          << output;
+      EXPECT_EQ(jsonNumber(test::readFile(stats), "keyframes"), (i + 1) * 40 / every_n);
+      points[i++] = mapPoints(stats);
+    }
+    std::cout << "every " << every_n << ": " << points[0] << " points after one pass, " << points[1]
+              << " after two\n";
+    EXPECT_GT(points[0], 100000);
+    EXPECT_LE(std::abs(points[1] - points[0]), 10) << "every_n=" << every_n;
+  }
 }
 
 TEST(SyntheticMapping, NoiseFreeDepthGivesAnAlmostExactMap) {

@@ -21,12 +21,14 @@ PointBatch batchOf(const std::vector<Eigen::Vector3f>& points, float weight = 1.
 
 TEST(VoxelMap, KeysRoundTripIncludingNegativeCoordinates) {
   VoxelMap map(0.01);
-  for (const Eigen::Vector3f& p : {Eigen::Vector3f(0.005f, 0.005f, 0.005f), Eigen::Vector3f(-0.005f, -1.234f, 7.5f),
-                                  Eigen::Vector3f(-10000.0f, 10000.0f, -0.0f)}) {
+  for (const Eigen::Vector3f& p :
+       {Eigen::Vector3f(0.005f, 0.005f, 0.005f), Eigen::Vector3f(-0.005f, -1.234f, 7.5f),
+        Eigen::Vector3f(-10000.0f, 10000.0f, -0.0f)}) {
     std::uint64_t key;
     ASSERT_TRUE(map.keyFor(p, key));
     const Eigen::Vector3i v = VoxelMap::unpack(key);
-    for (int axis = 0; axis < 3; ++axis) EXPECT_EQ(v[axis], static_cast<int>(std::floor(p[axis] / 0.01f)));
+    for (int axis = 0; axis < 3; ++axis)
+      EXPECT_EQ(v[axis], static_cast<int>(std::floor(p[axis] / 0.01f)));
   }
   std::uint64_t key;
   EXPECT_FALSE(map.keyFor(Eigen::Vector3f(20000.0f, 0, 0), key));  // beyond ±2^20 voxels
@@ -41,7 +43,7 @@ TEST(VoxelMap, WeightedMeanOfPositionAndColour) {
   b.weights = {1.0f, 3.0f};
   map.integrate(b);
   ASSERT_EQ(map.size(), 1u);
-  const auto& v = map.voxels().begin()->second;
+  const auto& v = map.voxels().front();
   EXPECT_NEAR(v.position.x(), (0.01f + 3 * 0.05f) / 4, 1e-6);
   EXPECT_NEAR(v.position.z(), (0.03f + 3 * 0.07f) / 4, 1e-6);
   EXPECT_NEAR(v.color.x(), 150.0f, 1e-4);
@@ -78,7 +80,8 @@ TEST(VoxelMap, SceneLargerThanPclVoxelGridLimit) {
   std::vector<Eigen::Vector3f> points;
   const int n = 600;  // 600 x 600 samples 5 cm apart
   for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) points.emplace_back(-15.0f + 0.05f * i + 0.0025f, 0.0025f, -15.0f + 0.05f * j + 0.0025f);
+    for (int j = 0; j < n; ++j)
+      points.emplace_back(-15.0f + 0.05f * i + 0.0025f, 0.0025f, -15.0f + 0.05f * j + 0.0025f);
   points.emplace_back(0.0025f, 25.0025f, 0.0025f);  // a 25 m tall outlier stretches the extent
   map.integrate(batchOf(points));
   EXPECT_EQ(map.size(), points.size());

@@ -20,7 +20,9 @@ struct DepthFilter {
   int min_neighbours = 4;
 
   // `scratch` is reused between calls to avoid allocating per frame.
-  void apply(cv::Mat& depth, cv::Mat& scratch) const;
+  void apply(cv::Mat& depth, cv::Mat& scratch) const { apply(depth, depth, scratch); }
+  // The same from `input` into `output` (which may be `input`), saving a copy.
+  void apply(const cv::Mat& input, cv::Mat& output, cv::Mat& scratch) const;
 };
 
 }  // namespace rgbdmap

@@ -11,9 +11,13 @@ namespace rgbdmap {
 // exceeds max_relative_range * depth) or miss too many pixels keep the measured value, so edges
 // are not smeared between foreground and background.
 struct DepthSmoother {
-  int radius = 2;                     // window (2r+1)^2; 0 disables smoothing
-  double max_relative_range = 0.03;   // depth spread in the window allowed, relative to depth
-  double min_valid_fraction = 0.75;   // share of window pixels that must have depth
+  int radius = 2;                    // window (2r+1)^2; 0 disables smoothing
+  double max_relative_range = 0.03;  // depth spread in the window allowed, relative to depth
+  double min_valid_fraction = 0.75;  // share of window pixels that must have depth
+  // Pixels that cannot be smoothed (edges, sparse windows) keep their measurement by default.
+  // Dropping them instead keeps the raw noise (25x the variance) out of a fused map, where
+  // its tails would become isolated points 1-2 cm off the surfaces; other views fill in.
+  bool drop_unsmoothed = false;
 
   // Smooths `depth` (CV_32FC1, metres, 0 = missing) in place. The scratch images are reused.
   void apply(cv::Mat& depth, cv::Mat& inverse, cv::Mat& valid, cv::Mat& sum, cv::Mat& count,

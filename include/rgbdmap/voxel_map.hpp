@@ -2,10 +2,11 @@
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+#include <tsl/hopscotch_map.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
-#include <tsl/hopscotch_map.h>
 #include <vector>
 
 namespace rgbdmap {
@@ -24,8 +25,8 @@ struct PointBatch {
   std::size_t size() const { return positions.size(); }
 };
 
-// Mixes all bits of a packed voxel key: the identity hash std::hash gives integers puts
-// neighbouring voxels into neighbouring buckets, which overflows hopscotch neighbourhoods.
+// Mixes all bits of a packed key: the identity hash std::hash gives integers puts neighbouring
+// blocks into neighbouring buckets, which overflows hopscotch neighbourhoods.
 struct VoxelKeyHash {
   std::size_t operator()(std::uint64_t key) const {
     key ^= key >> 33;
@@ -38,9 +39,16 @@ struct VoxelKeyHash {
 };
 
 // A sparse voxel grid in which every voxel keeps the weighted running mean of the positions and
-// colours that fell into it. A hash of 64-bit voxel keys (21 bits per axis) means no extent
-// limit short of ±2^20 voxels per axis (±10 km at 1 cm) and memory proportional to the occupied
-// voxels; one output point per voxel by construction.
+// colours that fell into it. Voxel keys pack 21 bits per axis: no extent limit short of ±2^20
+// voxels per axis (±10 km at 1 cm), memory proportional to the occupied space, one output point
+// per voxel by construction.
+//
+// Layout (for speed): a keyframe touches ~100k voxels, and one random hash lookup per voxel in
+// a table of millions is one cache miss each, most of a keyframe's cost. So voxels are grouped
+// in blocks of 4x4x4: the hash holds blocks, a block holds the indices of its voxels, and the
+// voxels themselves sit in one array in the order they were created. Consecutive pixels mostly
+// stay in one block (one hash lookup per block, not per point), and a revisit reads voxels in
+// about the order it created them.
 class VoxelMap {
  public:
   struct Voxel {
@@ -50,38 +58,51 @@ class VoxelMap {
     std::uint32_t observations = 0;  // points fused into this voxel
   };
 
-  explicit VoxelMap(double voxel_size);
+  // Voxels that received fewer than min_observations points are kept (more may come) but not
+  // extracted: with many frames, a voxel holding a single point is almost always a noise tail.
+  explicit VoxelMap(double voxel_size, std::uint32_t min_observations = 1);
 
   void integrate(const PointBatch& batch);
 
-  std::size_t size() const { return voxels_.size(); }
+  std::size_t size() const { return voxels_.size(); }  // every voxel
+  std::size_t pointCount() const { return points_; }   // voxels extract() writes
+  std::uint32_t minObservations() const { return min_observations_; }
   double voxelSize() const { return voxel_size_; }
   std::uint64_t rejectedPoints() const { return rejected_; }
-  // One point per voxel observed at least min_observations times, in a deterministic order
-  // (the hash map's, which depends only on the sequence of insertions).
-  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud, std::uint32_t min_observations = 1) const;
-  using Storage = tsl::hopscotch_map<std::uint64_t, Voxel, VoxelKeyHash>;
-  const Storage& voxels() const { return voxels_; }
+  // One point per voxel observed at least min_observations times (the map's own by default), in
+  // a deterministic order (the order the voxels were created in).
+  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
+    extract(cloud, min_observations_);
+  }
+  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud, std::uint32_t min_observations) const;
+  // Every voxel, in the order they were created.
+  const std::vector<Voxel>& voxels() const { return voxels_; }
 
   // Voxel coordinates <-> key. Exposed for tests; keyFor returns false outside the key range.
   bool keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const;
   static Eigen::Vector3i unpack(std::uint64_t key);
 
  private:
-  // One keyframe's points summed per voxel before they touch the (large, cache-cold) map: a
-  // frame has several points per voxel, so the map sees one update per voxel instead of one
-  // per point. The weighted mean is associative, so the result is the same.
-  struct FrameSum {
-    Eigen::Vector3f weighted_position = Eigen::Vector3f::Zero();
-    Eigen::Vector3f weighted_color = Eigen::Vector3f::Zero();
-    float weight = 0.0f;
-    std::uint32_t points = 0;
-  };
+  static constexpr int kBlockBits = 3;  // 8 voxels per block edge
+  static constexpr int kBlockVoxels = 1 << (3 * kBlockBits);
+  // Index + 1 in voxels_ of each voxel of a block; 0 = not observed yet.
+  using Block = std::array<std::uint32_t, kBlockVoxels>;
+
+  // Where the slot of the voxel containing p is (block index * kBlockVoxels + position in the
+  // block), creating the block if new; false outside the key range.
+  bool slotOf(const Eigen::Vector3f& p, std::uint32_t& slot);
 
   double voxel_size_;
   float inv_voxel_size_;
-  Storage voxels_;
-  tsl::hopscotch_map<std::uint64_t, FrameSum, VoxelKeyHash> frame_sums_;
+  std::uint32_t min_observations_;
+  std::size_t points_ = 0;  // voxels with at least min_observations_ points
+  tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // key -> blocks_
+  std::vector<Block> blocks_;
+  std::vector<Voxel> voxels_;
+  std::vector<std::uint32_t> point_slots_, point_voxels_;  // per point of a batch (scratch)
+  // The block of the previous lookup: neighbouring pixels usually fall into the same one.
+  std::uint64_t last_block_key_ = 0;
+  std::uint32_t last_block_ = UINT32_MAX;
   std::uint64_t rejected_ = 0;
 };
 

@@ -27,7 +27,8 @@ DepthFilter makeFilter(const Config& c) {
 
 KeyframeIntegrator::KeyframeIntegrator(const Config& config)
     : filter_(makeFilter(config)),
-      smoother_{config.smooth_radius, config.edge_jump, 0.75},
+      // Fusion averages many views of each surface, so unsmoothable pixels are dropped.
+      smoother_{config.smooth_radius, config.edge_jump, 0.75, true},
       projector_(config.camera, config.undistort),
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
@@ -47,8 +48,7 @@ KeyframeIntegrator::KeyframeIntegrator(const Config& config)
 
 void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {
   const auto start = std::chrono::steady_clock::now();
-  frame.depth.copyTo(depth_);
-  filter_.apply(depth_, scratch_);
+  filter_.apply(frame.depth, depth_, scratch_);  // the frame stays untouched
   smoother_.apply(depth_, inverse_, valid_, sum_, count_, low_, high_);
   stats.filter_latency.record(secondsSince(start));
 

@@ -7,7 +7,7 @@ namespace {
 
 KeyframeSelector makeSelector(const Config& c) {
   KeyframeSelector s;
-  s.policy = c.keyframe_policy == "motion"  ? KeyframeSelector::Policy::kMotion
+  s.policy = c.keyframe_policy == "motion" ? KeyframeSelector::Policy::kMotion
              : c.keyframe_policy == "both" ? KeyframeSelector::Policy::kBoth
                                            : KeyframeSelector::Policy::kInterval;
   s.every_n = c.keyframe_every_n;
@@ -22,9 +22,9 @@ Mapper::Mapper(const Config& config, std::unique_ptr<PoseProvider> poses, RunSta
     : poses_(std::move(poses)),
       selector_(makeSelector(config)),
       integrator_(config),
-      map_(config.voxel_size),
+      map_(config.voxel_size, static_cast<std::uint32_t>(config.map_min_observations)),
       stats_(stats),
-      min_observations_(static_cast<std::uint32_t>(config.map_min_observations)) {}
+      min_observations_(map_.minObservations()) {}
 
 bool Mapper::process(Frame& frame) {
   const auto start = std::chrono::steady_clock::now();
@@ -39,13 +39,13 @@ bool Mapper::process(Frame& frame) {
   integrator_.integrate(frame, map_, stats_);
   keyframes_.push_back({frame.timestamp, frame.pose});
   stats_.keyframes.fetch_add(1);
-  stats_.map_points.store(map_.size());
+  stats_.map_points.store(map_.pointCount());  // what a snapshot writes
   return true;
 }
 
 std::shared_ptr<MapCloud> Mapper::snapshot() const {
   auto cloud = std::make_shared<MapCloud>();
-  map_.extract(*cloud, min_observations_);
+  map_.extract(*cloud);
   return cloud;
 }
 

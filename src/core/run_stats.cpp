@@ -38,8 +38,10 @@ std::string RunStats::toJson() const {
   std::ostringstream out;
   out.precision(6);
   auto latency = [&](const char* name, const LatencyHistogram& h, bool last) {
-    out << "    \"" << name << "\": {\"count\": " << h.count() << ", \"mean_ms\": " << h.mean() * 1e3
-        << ", \"p50_ms\": " << h.percentile(0.5) * 1e3 << ", \"p90_ms\": " << h.percentile(0.9) * 1e3
+    out << "    \"" << name << "\": {\"count\": " << h.count()
+        << ", \"mean_ms\": " << h.mean() * 1e3 << ", \"p50_ms\": " << h.percentile(0.5) * 1e3
+        << ", \"p90_ms\": " << h.percentile(0.9) * 1e3
+        << ", \"p95_ms\": " << h.percentile(0.95) * 1e3
         << ", \"p99_ms\": " << h.percentile(0.99) * 1e3 << ", \"max_ms\": " << h.max() * 1e3 << "}"
         << (last ? "\n" : ",\n");
   };

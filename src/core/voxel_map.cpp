@@ -10,61 +10,101 @@ constexpr int kBits = 21;
 constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20, 2^20) to [0, 2^21)
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
-}  // namespace
-
-VoxelMap::VoxelMap(double voxel_size)
-    : voxel_size_(voxel_size), inv_voxel_size_(static_cast<float>(1.0 / voxel_size)) {}
-
-bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
-  key = 0;
+// Voxel coordinates shifted to [0, 2^21) per axis, or false outside the key range (or NaN).
+bool voxelIndex(const Eigen::Vector3f& p, float inv_voxel_size, std::uint64_t index[3]) {
   for (int axis = 0; axis < 3; ++axis) {
-    const float scaled = std::floor(p[axis] * inv_voxel_size_);
+    const float scaled = std::floor(p[axis] * inv_voxel_size);
     if (!(scaled >= -static_cast<float>(kOffset) && scaled < static_cast<float>(kOffset)))
       return false;  // also rejects NaN
-    const auto index = static_cast<std::uint64_t>(static_cast<std::int64_t>(scaled) + kOffset);
-    key |= index << (kBits * axis);
+    index[axis] = static_cast<std::uint64_t>(static_cast<std::int64_t>(scaled) + kOffset);
   }
+  return true;
+}
+
+}  // namespace
+
+VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
+    : voxel_size_(voxel_size),
+      inv_voxel_size_(static_cast<float>(1.0 / voxel_size)),
+      min_observations_(std::max<std::uint32_t>(min_observations, 1)) {}
+
+bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
+  std::uint64_t index[3];
+  key = 0;
+  if (!voxelIndex(p, inv_voxel_size_, index)) return false;
+  for (int axis = 0; axis < 3; ++axis) key |= index[axis] << (kBits * axis);
   return true;
 }
 
 Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
   Eigen::Vector3i v;
   for (int axis = 0; axis < 3; ++axis)
-    v[axis] = static_cast<int>(static_cast<std::int64_t>((key >> (kBits * axis)) & kMask) - kOffset);
+    v[axis] =
+        static_cast<int>(static_cast<std::int64_t>((key >> (kBits * axis)) & kMask) - kOffset);
   return v;
 }
 
-void VoxelMap::integrate(const PointBatch& batch) {
-  frame_sums_.clear();
-  // Neighbouring pixels usually fall into the same voxel, so the last sum is remembered and
-  // the lookup skipped for runs of equal keys. The pointer is refreshed after every lookup,
-  // because an insertion may move the table's elements.
-  std::uint64_t cached_key = 0;
-  FrameSum* cached = nullptr;
-  for (std::size_t i = 0; i < batch.size(); ++i) {
-    std::uint64_t key;
-    if (!keyFor(batch.positions[i], key)) {
-      ++rejected_;
-      continue;
-    }
-    if (!cached || key != cached_key) {
-      cached = &frame_sums_[key];
-      cached_key = key;
-    }
-    const float w = batch.weights[i];
-    cached->weighted_position += w * batch.positions[i];
-    cached->weighted_color += w * batch.colors[i];
-    cached->weight += w;
-    ++cached->points;
+bool VoxelMap::slotOf(const Eigen::Vector3f& p, std::uint32_t& slot) {
+  std::uint64_t index[3];
+  if (!voxelIndex(p, inv_voxel_size_, index)) return false;
+  constexpr std::uint64_t kLocalMask = (1u << kBlockBits) - 1;
+  std::uint64_t block_key = 0;
+  std::uint32_t local = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    block_key |= (index[axis] >> kBlockBits) << (kBits * axis);
+    local |= static_cast<std::uint32_t>(index[axis] & kLocalMask) << (kBlockBits * axis);
   }
-  for (const auto& [key, sum] : frame_sums_) {
-    Voxel& v = voxels_[key];
-    const float total = v.weight + sum.weight;
-    const float alpha = sum.weight / total;
-    v.position += alpha * (sum.weighted_position / sum.weight - v.position);
-    v.color += alpha * (sum.weighted_color / sum.weight - v.color);
-    v.weight = total;
-    v.observations += sum.points;
+  if (block_key != last_block_key_ || last_block_ == UINT32_MAX) {
+    const auto [it, inserted] =
+        block_index_.try_emplace(block_key, static_cast<std::uint32_t>(blocks_.size()));
+    if (inserted) blocks_.emplace_back().fill(0);
+    last_block_key_ = block_key;
+    last_block_ = it->second;
+  }
+  slot = last_block_ * kBlockVoxels + local;
+  return true;
+}
+
+void VoxelMap::integrate(const PointBatch& batch) {
+  // Three passes over the points, so that the memory each one reads (cold, for a large map) can
+  // be prefetched a few points ahead instead of stalling on one cache miss after the other.
+  constexpr std::size_t kAhead = 16;
+  constexpr std::uint32_t kRejected = UINT32_MAX;
+  const std::size_t n = batch.size();
+  point_slots_.resize(n);
+  point_voxels_.resize(n);
+  // 1. The slot of each point's voxel (a hash lookup per block, not per point).
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!slotOf(batch.positions[i], point_slots_[i])) {
+      ++rejected_;
+      point_slots_[i] = kRejected;
+    }
+  }
+  // 2. The voxel of each slot, created on first sight (in point order: deterministic).
+  std::uint32_t* slots = blocks_.empty() ? nullptr : blocks_.front().data();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i + kAhead < n && point_slots_[i + kAhead] != kRejected)
+      __builtin_prefetch(slots + point_slots_[i + kAhead]);
+    if (point_slots_[i] == kRejected) continue;
+    std::uint32_t& slot = slots[point_slots_[i]];
+    if (slot == 0) {
+      voxels_.emplace_back();
+      slot = static_cast<std::uint32_t>(voxels_.size());
+    }
+    point_voxels_[i] = slot - 1;
+  }
+  // 3. The weighted running mean: after the update, position = sum(w p) / sum(w).
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i + kAhead < n && point_slots_[i + kAhead] != kRejected)
+      __builtin_prefetch(&voxels_[point_voxels_[i + kAhead]]);
+    if (point_slots_[i] == kRejected) continue;
+    Voxel& v = voxels_[point_voxels_[i]];
+    const float w = batch.weights[i];
+    v.weight += w;
+    const float alpha = w / v.weight;
+    v.position += alpha * (batch.positions[i] - v.position);
+    v.color += alpha * (batch.colors[i] - v.color);
+    if (++v.observations == min_observations_) ++points_;
   }
 }
 
@@ -72,7 +112,7 @@ void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud,
                        std::uint32_t min_observations) const {
   cloud.clear();
   cloud.reserve(voxels_.size());
-  for (const auto& [key, v] : voxels_) {
+  for (const Voxel& v : voxels_) {
     if (v.observations < min_observations) continue;
     pcl::PointXYZRGB p;
     p.x = v.position.x();
