@@ -176,8 +176,10 @@ int runMapping(const MapOptions &o) {
 }  // namespace
 
 int main(int argc, char **argv) {
-  SignalThread::blockInThisThread();  // before any thread exists, so all inherit
-                                      // the mask
+  // Before any thread exists, so all inherit the mask.
+  SignalThread::blockInThisThread();
+  // spdlog creates its registry on first use: do it here, before any thread can log.
+  spdlog::default_logger_raw();
   CLI::App app{"rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};
   app.set_version_flag("--version", RGBDMAP_VERSION);
   MapOptions o;

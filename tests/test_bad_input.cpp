@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
-#include <regex>
 
 #include "test_support.hpp"
 

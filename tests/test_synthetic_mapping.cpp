@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <regex>
 #include <sstream>
 
 #include "test_support.hpp"
@@ -17,16 +16,6 @@ namespace rgbdmap {
 namespace {
 
 constexpr int kFrames = 150;
-
-double jsonNumber(const std::string& json, const std::string& key) {
-  const std::regex pattern("\"" + key + "\":\\s*([-+0-9.eE]+)");
-  std::smatch match;
-  if (!std::regex_search(json, match, pattern)) {
-    ADD_FAILURE() << "no \"" << key << "\" in " << json;
-    return std::nan("");
-  }
-  return std::stod(match[1]);
-}
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -64,12 +53,12 @@ MappingResult synthMapEvaluate(const std::string& dir, int every_n) {
   std::cout << output;
   const std::string json = test::readFile(dir + "/score.json");
   MappingResult r{};
-  r.precision = jsonNumber(json, "precision");
-  r.recall = jsonNumber(json, "recall");
-  r.f_score = jsonNumber(json, "f_score");
-  r.mean_mm = jsonNumber(json, "mean_distance_mm");
-  r.median_mm = jsonNumber(json, "median_distance_mm");
-  r.p95_mm = jsonNumber(json, "p95_distance_mm");
+  r.precision = test::jsonNumber(json, "precision");
+  r.recall = test::jsonNumber(json, "recall");
+  r.f_score = test::jsonNumber(json, "f_score");
+  r.mean_mm = test::jsonNumber(json, "mean_distance_mm");
+  r.median_mm = test::jsonNumber(json, "median_distance_mm");
+  r.p95_mm = test::jsonNumber(json, "p95_distance_mm");
   const std::string prefix = "every_n_" + std::to_string(every_n) + "_";
   ::testing::Test::RecordProperty(prefix + "precision", std::to_string(r.precision));
   ::testing::Test::RecordProperty(prefix + "recall", std::to_string(r.recall));
@@ -100,9 +89,9 @@ TEST(SyntheticMapping, EveryFrameMapsTheVisibleSurfaceWithinMillimetres) {
       << output;
   std::cout << output;
   const std::string json = test::readFile(dir + "/trajectory.json");
-  EXPECT_EQ(jsonNumber(json, "ate_pairs"), kFrames);
-  EXPECT_LT(jsonNumber(json, "ate_rmse_m"), 0.004);
-  EXPECT_LT(jsonNumber(json, "rpe_rot_rmse_deg"), 0.5);
+  EXPECT_EQ(test::jsonNumber(json, "ate_pairs"), kFrames);
+  EXPECT_LT(test::jsonNumber(json, "ate_rmse_m"), 0.004);
+  EXPECT_LT(test::jsonNumber(json, "rpe_rot_rmse_deg"), 0.5);
 }
 
 TEST(SyntheticMapping, EveryTenthFrameStillCoversMostOfTheSurface) {
@@ -141,7 +130,7 @@ void writeTwice(const std::string& list, const std::string& out, double shift) {
 }
 
 long mapPoints(const std::string& stats_json) {
-  return static_cast<long>(jsonNumber(test::readFile(stats_json), "map_points"));
+  return static_cast<long>(test::jsonNumber(test::readFile(stats_json), "map_points"));
 }
 
 TEST(SyntheticMapping, ASecondPassOverTheSameFramesDoesNotGrowTheMap) {
@@ -169,7 +158,7 @@ TEST(SyntheticMapping, ASecondPassOverTheSameFramesDoesNotGrowTheMap) {
                           &output),
                 0)
           << output;
-      EXPECT_EQ(jsonNumber(test::readFile(stats), "keyframes"), (i + 1) * 40 / every_n);
+      EXPECT_EQ(test::jsonNumber(test::readFile(stats), "keyframes"), (i + 1) * 40 / every_n);
       points[i++] = mapPoints(stats);
     }
     std::cout << "every " << every_n << ": " << points[0] << " points after one pass, " << points[1]
@@ -200,10 +189,10 @@ TEST(SyntheticMapping, NoiseFreeDepthGivesAnAlmostExactMap) {
       << output;
   std::cout << output;
   const std::string json = test::readFile(dir + "/score.json");
-  EXPECT_LT(jsonNumber(json, "median_distance_mm"), 0.5);
-  EXPECT_LT(jsonNumber(json, "mean_distance_mm"), 0.5);
-  EXPECT_GE(jsonNumber(json, "precision"), 0.99);
-  EXPECT_GE(jsonNumber(json, "recall"), 0.9);
+  EXPECT_LT(test::jsonNumber(json, "median_distance_mm"), 0.5);
+  EXPECT_LT(test::jsonNumber(json, "mean_distance_mm"), 0.5);
+  EXPECT_GE(test::jsonNumber(json, "precision"), 0.99);
+  EXPECT_GE(test::jsonNumber(json, "recall"), 0.9);
 }
 
 TEST(SyntheticMapping, SynthNamesABadSceneFile) {
