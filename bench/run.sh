@@ -345,7 +345,7 @@ if [ -n "$out_file" ]; then
     echo
     echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
     echo "- host: $(uname -n), $(getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?') cores, $(uname -sr)"
-    echo "- commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet HEAD 2>/dev/null || echo ' (with uncommitted changes)')"
+    echo "- commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet HEAD -- . ":(exclude)${out_file#"$root"/}" 2>/dev/null || echo ' (with uncommitted changes)')"
     echo "- command: bash bench/run.sh ${frames_limit:+--frames $frames_limit }--build ${build_dir#"$root"/}$([ "$run_micro" = 1 ] && echo " --micro")"
     echo
     echo '```'

@@ -99,5 +99,51 @@ TEST(VoxelMap, MinObservationsFiltersExtraction) {
   EXPECT_EQ(cloud.size(), 1u);
 }
 
+TEST(VoxelMap, PointCountIsWhatExtractWrites) {
+  VoxelMap map(0.1, 2);
+  map.integrate(batchOf({{0.01f, 0.01f, 0.01f}, {0.02f, 0.02f, 0.02f}, {1.05f, 1.05f, 1.05f}}));
+  EXPECT_EQ(map.size(), 2u);
+  EXPECT_EQ(map.pointCount(), 1u);
+  MapCloud cloud;
+  map.extract(cloud);
+  EXPECT_EQ(cloud.size(), map.pointCount());
+  map.integrate(batchOf({{1.06f, 1.06f, 1.06f}}));  // the second voxel's second point
+  EXPECT_EQ(map.pointCount(), 2u);
+}
+
+TEST(VoxelMap, SameBatchesGiveTheSameCloudAcrossBlockBorders) {
+  // Points on a slanted plane crossing many 8x8x8 blocks, both signs of every axis: each voxel
+  // gets its own running mean, and extraction is deterministic (creation order).
+  std::vector<Eigen::Vector3f> points;
+  for (int i = -300; i < 300; ++i)
+    for (int j = -300; j < 300; j += 3)
+      points.emplace_back(0.0011f * i, 0.0013f * j, 0.3f * 0.0011f * i - 0.2f * 0.0013f * j);
+  VoxelMap a(0.01), b(0.01);
+  for (int pass = 0; pass < 2; ++pass) {
+    a.integrate(batchOf(points));
+    b.integrate(batchOf(points));
+  }
+  MapCloud ca, cb;
+  a.extract(ca);
+  b.extract(cb);
+  ASSERT_EQ(ca.size(), cb.size());
+  for (std::size_t i = 0; i < ca.size(); ++i)
+    EXPECT_EQ(ca[i].getVector3fMap(), cb[i].getVector3fMap());
+  // One voxel per distinct key of the input, and each mean lies in its own voxel (a point per key).
+  std::set<std::uint64_t> input_keys, output_keys;
+  for (const auto& p : points) {
+    std::uint64_t key;
+    ASSERT_TRUE(a.keyFor(p, key));
+    input_keys.insert(key);
+  }
+  for (const auto& p : ca) {
+    std::uint64_t key;
+    ASSERT_TRUE(a.keyFor(p.getVector3fMap(), key));
+    output_keys.insert(key);
+  }
+  EXPECT_EQ(a.size(), input_keys.size());
+  EXPECT_EQ(output_keys, input_keys);
+}
+
 }  // namespace
 }  // namespace rgbdmap

@@ -11,12 +11,13 @@ constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
 // Voxel coordinates shifted to [0, 2^21) per axis, or false outside the key range (or NaN).
-bool voxelIndex(const Eigen::Vector3f& p, float inv_voxel_size, std::uint64_t index[3]) {
+// Shifted first, the value is positive, so truncation is floor (cheaper than std::floor); in
+// double, the shift loses no fraction.
+bool voxelIndex(const Eigen::Vector3f& p, double inv_voxel_size, std::uint64_t index[3]) {
   for (int axis = 0; axis < 3; ++axis) {
-    const float scaled = std::floor(p[axis] * inv_voxel_size);
-    if (!(scaled >= -static_cast<float>(kOffset) && scaled < static_cast<float>(kOffset)))
-      return false;  // also rejects NaN
-    index[axis] = static_cast<std::uint64_t>(static_cast<std::int64_t>(scaled) + kOffset);
+    const double shifted = static_cast<double>(p[axis]) * inv_voxel_size + kOffset;
+    if (!(shifted >= 0.0 && shifted < 2.0 * kOffset)) return false;  // also rejects NaN
+    index[axis] = static_cast<std::uint64_t>(shifted);
   }
   return true;
 }
@@ -25,7 +26,7 @@ bool voxelIndex(const Eigen::Vector3f& p, float inv_voxel_size, std::uint64_t in
 
 VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
     : voxel_size_(voxel_size),
-      inv_voxel_size_(static_cast<float>(1.0 / voxel_size)),
+      inv_voxel_size_(1.0 / voxel_size),
       min_observations_(std::max<std::uint32_t>(min_observations, 1)) {}
 
 bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
