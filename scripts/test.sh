@@ -29,8 +29,12 @@ TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$root/tests/t
 
 section "AddressSanitizer + UBSan: all tests"
 build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDMAP_SANITIZE=address -DRGBDMAP_BUILD_BENCH=OFF
+export UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1"
 ASAN_OPTIONS="detect_leaks=1 abort_on_error=1" \
   LSAN_OPTIONS="suppressions=$root/tests/lsan.supp print_suppressions=0" \
-  UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1" \
-  ctest --test-dir build-asan --output-on-failure -j "$jobs" --timeout 1800
+  ctest --test-dir build-asan --output-on-failure -j "$jobs" --timeout 1800 -LE openni2
+# Programs that load OpenNI2's drivers: memory errors and UB still stop them, leaks are not
+# checked (the drivers are unloaded at shutdown, so their allocations cannot be attributed).
+ASAN_OPTIONS="detect_leaks=0 abort_on_error=1" \
+  ctest --test-dir build-asan --output-on-failure -j "$jobs" --timeout 1800 -L openni2
 section "all test runs passed"

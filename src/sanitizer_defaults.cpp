@@ -39,6 +39,9 @@ const char* __lsan_default_suppressions() {
   return "leak:libOpenNI2.so\n"
          "leak:libOpenNI.so\n"
          "leak:libusb-1.0.so\n"
+         "leak:libOniFile.so\n"
+         "leak:libPS1080.so\n"
+         "leak:libPSLink.so\n"
          "leak:libvtk\n"
          "leak:libfontconfig\n"
          "leak:libgomp\n";
