@@ -41,22 +41,22 @@ class OpenNI2Runtime {
     if (users() == 0 && openni::OpenNI::initialize() != openni::STATUS_OK)
       throw InputError(std::string("OpenNI2 cannot start: ") + openni::OpenNI::getExtendedError());
     ++users();
-    return std::shared_ptr<OpenNI2Runtime>(new OpenNI2Runtime, [](OpenNI2Runtime *runtime) {
+    return std::shared_ptr<OpenNI2Runtime>(new OpenNI2Runtime, [](OpenNI2Runtime* runtime) {
       delete runtime;
       std::lock_guard<std::mutex> lock(mutex());
       if (--users() == 0) openni::OpenNI::shutdown();
     });
   }
-  OpenNI2Runtime(const OpenNI2Runtime &) = delete;
-  OpenNI2Runtime &operator=(const OpenNI2Runtime &) = delete;
+  OpenNI2Runtime(const OpenNI2Runtime&) = delete;
+  OpenNI2Runtime& operator=(const OpenNI2Runtime&) = delete;
 
  private:
   OpenNI2Runtime() = default;
-  static std::mutex &mutex() {
+  static std::mutex& mutex() {
     static std::mutex instance;
     return instance;
   }
-  static int &users() {
+  static int& users() {
     static int count = 0;
     return count;
   }
@@ -72,12 +72,12 @@ std::string openni2Error() {
   return first == std::string::npos ? "no details" : text.substr(first, last - first + 1);
 }
 
-bool endsWith(const std::string &text, const std::string &suffix) {
+bool endsWith(const std::string& text, const std::string& suffix) {
   return text.size() >= suffix.size() &&
          text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-const char *formatName(openni::PixelFormat format) {
+const char* formatName(openni::PixelFormat format) {
   switch (format) {
     case openni::PIXEL_FORMAT_DEPTH_1_MM:
       return "DEPTH_1_MM";
@@ -105,7 +105,7 @@ const char *formatName(openni::PixelFormat format) {
 
 // The reason `rgbdmap --source openni2` found nothing, from what the USB bus
 // shows.
-std::string noCameraMessage(const std::string &openni_error) {
+std::string noCameraMessage(const std::string& openni_error) {
   std::string message =
       "--source openni2: no camera found: OpenNI2 opened no device (" + openni_error + ")";
   const UsbScan scan = scanUsbCameras();
@@ -113,26 +113,21 @@ std::string noCameraMessage(const std::string &openni_error) {
     return message + "; the USB bus could not be read either (" + scan.bus_error + ")";
   if (!scan.anyCamera()) {
     message +=
-        "; the USB bus shows no Kinect v1 (045e:02ae), PrimeSense/ASUS "
-        "Xtion (1d27:06xx) "
-        "or Orbbec (2bc5:*) camera";
+        "; the USB bus shows no Kinect v1 (045e:02ae), PrimeSense/ASUS Xtion (1d27:06xx) or Orbbec "
+        "(2bc5:*) camera";
     message += scan.devices_seen == 0
-                   ? std::string(
-                         " and no USB device at all (in a container, pass "
-                         "/dev/bus/usb in)")
+                   ? std::string(" and no USB device at all (in a container, pass /dev/bus/usb in)")
                    : " among its " + std::to_string(scan.devices_seen) + " devices";
     if (!scan.cameras.empty())
       message +=
-          "; only the motor/audio parts of a Kinect v1 are there: its "
-          "camera needs the "
-          "Kinect's own power supply plugged in";
+          "; only the motor/audio parts of a Kinect v1 are there: its camera needs the Kinect's "
+          "own power supply plugged in";
     return message +
-           ". Plug a camera in, or replay a recording: --source "
-           "openni2:FILE.oni or "
-           "--source tum:DIR (`rgbdmap devices` lists cameras and access)";
+           ". Plug a camera in, or replay a recording: --source openni2:FILE.oni or --source "
+           "tum:DIR (`rgbdmap devices` lists cameras and access)";
   }
   message += "; on the USB bus:";
-  for (const UsbCamera &camera : scan.cameras) {
+  for (const UsbCamera& camera : scan.cameras) {
     message += "\n  " + camera.describe();
     if (!camera.problem.empty()) message += "; " + camera.problem;
     if (!camera.advice.empty()) message += "; " + camera.advice;
@@ -145,7 +140,7 @@ std::string noCameraMessage(const std::string &openni_error) {
 class DisconnectWatch : public openni::OpenNI::DeviceDisconnectedListener {
  public:
   explicit DisconnectWatch(std::string uri) : uri_(std::move(uri)) {}
-  void onDeviceDisconnected(const openni::DeviceInfo *info) override {
+  void onDeviceDisconnected(const openni::DeviceInfo* info) override {
     if (info && uri_ == info->getUri()) disconnected_.store(true);
   }
   bool disconnected() const { return disconnected_.load(); }
@@ -172,14 +167,14 @@ struct OpenDevice {
 // is never freed (reachable from here, so leak checkers do not count it).
 void keepOpenUntilExit(std::unique_ptr<OpenDevice> device) {
   static std::mutex mutex;
-  static auto *kept = new std::vector<std::unique_ptr<OpenDevice>>();
+  static auto* kept = new std::vector<std::unique_ptr<OpenDevice>>();
   std::lock_guard<std::mutex> lock(mutex);
   kept->push_back(std::move(device));
 }
 
 class OpenNI2Source : public FrameSource {
  public:
-  OpenNI2Source(const std::string &uri_or_file, const Config &config)
+  OpenNI2Source(const std::string& uri_or_file, const Config& config)
       : runtime_(OpenNI2Runtime::acquire()),
         requested_(uri_or_file),
         config_camera_(config.camera),
@@ -190,7 +185,7 @@ class OpenNI2Source : public FrameSource {
   }
   ~OpenNI2Source() override { close(); }
 
-  ReadStatus read(Frame &frame) override;
+  ReadStatus read(Frame& frame) override;
   CameraIntrinsics intrinsics() const override { return camera_; }
   bool isLive() const override { return !is_file_; }
   bool providesPoses() const override { return false; }
@@ -200,10 +195,10 @@ class OpenNI2Source : public FrameSource {
   bool reconnect() override;
 
  private:
-  const std::string &label() const { return label_; }
+  const std::string& label() const { return label_; }
   // Opens and starts the device; throws InputError (with the USB diagnosis for
   // "" when `diagnose`). Leaves everything closed when it throws.
-  void open(const std::string &uri, bool diagnose);
+  void open(const std::string& uri, bool diagnose);
   void configure();
   void chooseVideoModes();
   void setUpRegistrationAndSync();
@@ -211,7 +206,7 @@ class OpenNI2Source : public FrameSource {
   void checkVideoModes();
   CameraIntrinsics intrinsicsFromDevice();
   void close();
-  std::string openFailure(const std::string &uri, bool diagnose) const;
+  std::string openFailure(const std::string& uri, bool diagnose) const;
   void pace(double stamp);
 
   // Declared first so that it is released last: OpenNI2 shuts down after
@@ -246,7 +241,7 @@ class OpenNI2Source : public FrameSource {
   Clock::time_point first_time_;
 };
 
-std::string OpenNI2Source::openFailure(const std::string &uri, bool diagnose) const {
+std::string OpenNI2Source::openFailure(const std::string& uri, bool diagnose) const {
   const std::string error = openni2Error();
   if (endsWith(uri, ".oni")) {
     struct stat st {};
@@ -268,8 +263,8 @@ std::string OpenNI2Source::openFailure(const std::string &uri, bool diagnose) co
   return message;
 }
 
-void OpenNI2Source::open(const std::string &uri, bool diagnose) {
-  const char *target = uri.empty() ? openni::ANY_DEVICE : uri.c_str();
+void OpenNI2Source::open(const std::string& uri, bool diagnose) {
+  const char* target = uri.empty() ? openni::ANY_DEVICE : uri.c_str();
   dev_ = std::make_unique<OpenDevice>();
   dev_->runtime = runtime_;
   if (dev_->device.open(target) != openni::STATUS_OK) {
@@ -287,7 +282,7 @@ void OpenNI2Source::open(const std::string &uri, bool diagnose) {
 }
 
 void OpenNI2Source::configure() {
-  const openni::DeviceInfo &info = dev_->device.getDeviceInfo();
+  const openni::DeviceInfo& info = dev_->device.getDeviceInfo();
   is_file_ = dev_->device.isFile();
   uri_ = info.getUri();
   label_ = "openni2:" + (is_file_ ? requested_ : uri_);
@@ -311,9 +306,7 @@ void OpenNI2Source::configure() {
     watch_ = std::make_unique<DisconnectWatch>(uri_);
     if (openni::OpenNI::addDeviceDisconnectedListener(watch_.get()) != openni::STATUS_OK) {
       spdlog::warn(
-          "{}: cannot watch for unplugging ({}); a vanished camera "
-          "shows as a {} s "
-          "timeout",
+          "{}: cannot watch for unplugging ({}); a vanished camera shows as a {} s timeout",
           label(), openni2Error(), kReadTimeout.count() / 1000.0);
       watch_.reset();
     }
@@ -337,9 +330,9 @@ void OpenNI2Source::configure() {
 // 640x480 (the configured size) at 30 fps: depth in 0.1 mm when offered (finer
 // than 1 mm at range), else 1 mm; colour as RGB888.
 void OpenNI2Source::chooseVideoModes() {
-  auto pick = [&](openni::VideoStream &stream,
-                  std::initializer_list<openni::PixelFormat> formats) -> const openni::VideoMode * {
-    const openni::Array<openni::VideoMode> &modes = stream.getSensorInfo().getSupportedVideoModes();
+  auto pick = [&](openni::VideoStream& stream,
+                  std::initializer_list<openni::PixelFormat> formats) -> const openni::VideoMode* {
+    const openni::Array<openni::VideoMode>& modes = stream.getSensorInfo().getSupportedVideoModes();
     for (const bool exact_fps : {true, false})
       for (const openni::PixelFormat format : formats)
         for (int i = 0; i < modes.getSize(); ++i)
@@ -349,8 +342,8 @@ void OpenNI2Source::chooseVideoModes() {
             return &modes[i];
     return nullptr;
   };
-  auto offered = [](openni::VideoStream &stream) {
-    const openni::Array<openni::VideoMode> &modes = stream.getSensorInfo().getSupportedVideoModes();
+  auto offered = [](openni::VideoStream& stream) {
+    const openni::Array<openni::VideoMode>& modes = stream.getSensorInfo().getSupportedVideoModes();
     std::string list;
     for (int i = 0; i < modes.getSize(); ++i)
       list += (i ? ", " : "") + std::to_string(modes[i].getResolutionX()) + "x" +
@@ -361,13 +354,13 @@ void OpenNI2Source::chooseVideoModes() {
   };
   const std::string size =
       std::to_string(config_camera_.width) + "x" + std::to_string(config_camera_.height);
-  const openni::VideoMode *depth_mode =
+  const openni::VideoMode* depth_mode =
       pick(dev_->depth, {openni::PIXEL_FORMAT_DEPTH_100_UM, openni::PIXEL_FORMAT_DEPTH_1_MM});
   if (!depth_mode)
     throw InputError(label() + ": no " + size + " depth mode in DEPTH_100_UM or DEPTH_1_MM (it " +
                      "offers " + offered(dev_->depth) +
                      "); set camera.width/height to one of them");
-  const openni::VideoMode *color_mode = pick(dev_->color, {openni::PIXEL_FORMAT_RGB888});
+  const openni::VideoMode* color_mode = pick(dev_->color, {openni::PIXEL_FORMAT_RGB888});
   if (!color_mode)
     throw InputError(label() + ": no " + size + " RGB888 colour mode (it offers " +
                      offered(dev_->color) + "); set camera.width/height to one of them");
@@ -384,34 +377,29 @@ void OpenNI2Source::chooseVideoModes() {
 void OpenNI2Source::setUpRegistrationAndSync() {
   if (is_file_) {
     spdlog::info(
-        "{}: a recording plays as it was recorded (depth-to-colour "
-        "registration {})",
-        label(),
+        "{}: a recording plays as it was recorded (depth-to-colour registration {})", label(),
         dev_->device.getImageRegistrationMode() == openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR
             ? "on"
             : "off or not recorded");
   } else if (!dev_->device.isImageRegistrationModeSupported(
                  openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
     spdlog::warn(
-        "{}: the device cannot register depth to colour: depth and colour "
-        "pixels are "
-        "misaligned by up to a few centimetres and colours bleed at edges",
+        "{}: the device cannot register depth to colour: depth and colour pixels are misaligned by "
+        "up to a few centimetres and colours bleed at edges",
         label());
   } else if (dev_->device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) !=
              openni::STATUS_OK) {
     spdlog::warn(
-        "{}: depth-to-colour registration failed to turn on ({}): "
-        "depth and colour "
-        "pixels are misaligned by up to a few centimetres",
+        "{}: depth-to-colour registration failed to turn on ({}): depth and colour pixels are "
+        "misaligned by up to a few centimetres",
         label(), openni2Error());
   } else {
     spdlog::info("{}: depth registered to colour by the device", label());
   }
   if (dev_->device.setDepthColorSyncEnabled(true) != openni::STATUS_OK)
     spdlog::warn(
-        "{}: depth/colour frame sync is not supported ({}): each "
-        "depth image is paired "
-        "with the colour image that arrives next to it",
+        "{}: depth/colour frame sync is not supported ({}): each depth image is paired with the "
+        "colour image that arrives next to it",
         label(), openni2Error());
 }
 
@@ -419,7 +407,7 @@ void OpenNI2Source::setUpRegistrationAndSync() {
 // is skipped however slowly the mapper reads; replay.rate timing is applied
 // here, in read().
 void OpenNI2Source::setUpPlayback() {
-  openni::PlaybackControl *playback = dev_->device.getPlaybackControl();
+  openni::PlaybackControl* playback = dev_->device.getPlaybackControl();
   if (!playback || !playback->isValid())
     throw InputError(label() + ": OpenNI2 gives no playback control for this recording");
   if (playback->setSpeed(-1.0f) != openni::STATUS_OK)
@@ -427,9 +415,7 @@ void OpenNI2Source::setUpPlayback() {
                  openni2Error());
   if (playback->setRepeatEnabled(false) != openni::STATUS_OK)
     spdlog::warn(
-        "{}: cannot turn off repeating ({}); the recording ends after "
-        "{} s without a "
-        "frame",
+        "{}: cannot turn off repeating ({}); the recording ends after {} s without a frame",
         label(), openni2Error(), kReadTimeout.count() / 1000.0);
   depth_total_ = std::max(playback->getNumberOfFrames(dev_->depth), 0);
   color_total_ = std::max(playback->getNumberOfFrames(dev_->color), 0);
@@ -472,27 +458,26 @@ CameraIntrinsics OpenNI2Source::intrinsicsFromDevice() {
   const int height = mode.getResolutionY();
   if (!intrinsics_from_device_) {
     if (width != config_camera_.width || height != config_camera_.height)
-      throw InputError(label() + ": delivers " + std::to_string(width) + "x" +
-                       std::to_string(height) + " but the camera is configured as " +
-                       std::to_string(config_camera_.width) + "x" +
-                       std::to_string(config_camera_.height) +
-                       "; set camera.width/height/fx/fy/cx/cy to match, or "
-                       "--set camera.intrinsics=device");
+      throw InputError(
+          label() + ": delivers " + std::to_string(width) + "x" + std::to_string(height) +
+          " but the camera is configured as " + std::to_string(config_camera_.width) + "x" +
+          std::to_string(config_camera_.height) +
+          "; set camera.width/height/fx/fy/cx/cy to match, or --set camera.intrinsics=device");
     return config_camera_;
   }
   auto valid = [](float fov) { return std::isfinite(fov) && fov > 0.01f && fov < 3.1f; };
   float hfov = dev_->color.getHorizontalFieldOfView();
   float vfov = dev_->color.getVerticalFieldOfView();
-  const char *from = "colour";
+  const char* from = "colour";
   if (!valid(hfov) || !valid(vfov)) {
     hfov = dev_->depth.getHorizontalFieldOfView();
     vfov = dev_->depth.getVerticalFieldOfView();
     from = "depth";
   }
   if (!valid(hfov) || !valid(vfov))
-    throw InputError(label() +
-                     ": reports no field of view for camera.intrinsics=device; use "
-                     "camera.intrinsics=preset");
+    throw InputError(
+        label() +
+        ": reports no field of view for camera.intrinsics=device; use camera.intrinsics=preset");
   CameraIntrinsics camera;
   camera.width = width;
   camera.height = height;
@@ -501,9 +486,8 @@ CameraIntrinsics OpenNI2Source::intrinsicsFromDevice() {
   camera.cx = (width - 1) / 2.0;
   camera.cy = (height - 1) / 2.0;
   spdlog::info(
-      "{}: intrinsics from the {} stream's field of view ({:.4f} x "
-      "{:.4f} rad): fx {:.1f} "
-      "fy {:.1f} cx {:.1f} cy {:.1f}",
+      "{}: intrinsics from the {} stream's field of view ({:.4f} x {:.4f} rad): fx {:.1f} fy "
+      "{:.1f} cx {:.1f} cy {:.1f}",
       label(), from, hfov, vfov, camera.fx, camera.fy, camera.cx, camera.cy);
   return camera;
 }
@@ -537,12 +521,12 @@ std::string OpenNI2Source::describe() const {
   return label() + " (" + name_ + ", " + size + ")";
 }
 
-ReadStatus OpenNI2Source::read(Frame &frame) {
+ReadStatus OpenNI2Source::read(Frame& frame) {
   if (ended_) return ReadStatus::kEnd;
   if (!open_)
     return ReadStatus::kTimeout;  // still unplugged: reconnect() has not
                                   // succeeded
-  openni::VideoStream *streams[] = {&dev_->depth, &dev_->color};
+  openni::VideoStream* streams[] = {&dev_->depth, &dev_->color};
   bool have_depth = false;
   bool have_color = false;
   bool wrong_size = false;
@@ -559,9 +543,8 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
       // The frame counts promised more than the file holds (a truncated
       // recording).
       spdlog::warn(
-          "{}: no frame for {} s after {} depth and {} colour frames "
-          "of {} + {}; taking "
-          "it as the end of the recording",
+          "{}: no frame for {} s after {} depth and {} colour frames of {} + {}; taking it as the "
+          "end of the recording",
           label(), kReadTimeout.count() / 1000.0, depth_read_, color_read_, depth_total_,
           color_total_);
       ended_ = true;
@@ -577,8 +560,8 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
       continue;
     }
-    openni::VideoStream &stream = ready == 0 ? dev_->depth : dev_->color;
-    openni::VideoFrameRef &ref = ready == 0 ? dev_->depth_frame : dev_->color_frame;
+    openni::VideoStream& stream = ready == 0 ? dev_->depth : dev_->color;
+    openni::VideoFrameRef& ref = ready == 0 ? dev_->depth_frame : dev_->color_frame;
     if (stream.readFrame(&ref) != openni::STATUS_OK || !ref.isValid()) continue;
     const int width = ref.getWidth();
     const int height = ref.getHeight();
@@ -589,14 +572,14 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
       if (wrong_size) continue;
       // In place: the Frame's images keep their buffers (same size and type
       // every time).
-      const cv::Mat units(height, width, CV_16UC1, const_cast<void *>(ref.getData()),
+      const cv::Mat units(height, width, CV_16UC1, const_cast<void*>(ref.getData()),
                           static_cast<std::size_t>(ref.getStrideInBytes()));
       units.convertTo(frame.depth, CV_32F, metres_per_unit_);
     } else {
       ++color_read_;
       have_color = true;
       if (wrong_size) continue;
-      const cv::Mat rgb(height, width, CV_8UC3, const_cast<void *>(ref.getData()),
+      const cv::Mat rgb(height, width, CV_8UC3, const_cast<void*>(ref.getData()),
                         static_cast<std::size_t>(ref.getStrideInBytes()));
       cv::cvtColor(rgb, frame.color, cv::COLOR_RGB2BGR);
       frame.timestamp = static_cast<double>(ref.getTimestamp()) * 1e-6;  // device clock, µs
@@ -604,11 +587,10 @@ ReadStatus OpenNI2Source::read(Frame &frame) {
   }
   if (is_file_ && (depth_read_ >= depth_total_ || color_read_ >= color_total_)) ended_ = true;
   if (wrong_size) {
-    spdlog::warn(
-        "{}: skipping a frame of {}x{} (depth) / {}x{} (colour); the "
-        "camera is {}x{}",
-        label(), dev_->depth_frame.getWidth(), dev_->depth_frame.getHeight(),
-        dev_->color_frame.getWidth(), dev_->color_frame.getHeight(), camera_.width, camera_.height);
+    spdlog::warn("{}: skipping a frame of {}x{} (depth) / {}x{} (colour); the camera is {}x{}",
+                 label(), dev_->depth_frame.getWidth(), dev_->depth_frame.getHeight(),
+                 dev_->color_frame.getWidth(), dev_->color_frame.getHeight(), camera_.width,
+                 camera_.height);
     ++skipped_;
     return ReadStatus::kSkipped;
   }
@@ -640,12 +622,12 @@ bool OpenNI2Source::reconnect() {
   const Clock::time_point give_up = Clock::now() + kReconnectWindow;
   std::string last_error;
   for (;;) {
-    for (const std::string &uri : candidates) {
+    for (const std::string& uri : candidates) {
       try {
         open(uri, false);
         spdlog::info("{}: reopened", label());
         return true;
-      } catch (const InputError &e) {
+      } catch (const InputError& e) {
         last_error = e.what();
       }
     }
@@ -658,8 +640,8 @@ bool OpenNI2Source::reconnect() {
 
 }  // namespace
 
-std::unique_ptr<FrameSource> openOpenNI2Source(const std::string &uri_or_file,
-                                               const Config &config) {
+std::unique_ptr<FrameSource> openOpenNI2Source(const std::string& uri_or_file,
+                                               const Config& config) {
   return std::make_unique<OpenNI2Source>(uri_or_file, config);
 }
 

@@ -18,7 +18,7 @@
 
 namespace {
 
-std::string stem(const std::string &path) {
+std::string stem(const std::string& path) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
   return (dot == std::string::npos || (slash != std::string::npos && dot < slash))
@@ -32,7 +32,7 @@ std::string stem(const std::string &path) {
 // progress (the destination is never half-written).
 class SignalThread {
  public:
-  SignalThread(rgbdmap::RunControl &control, std::string map_path)
+  SignalThread(rgbdmap::RunControl& control, std::string map_path)
       : control_(control), map_path_(std::move(map_path)) {
     thread_ = std::thread([this] { run(); });
   }
@@ -80,7 +80,7 @@ class SignalThread {
     }
   }
 
-  rgbdmap::RunControl &control_;
+  rgbdmap::RunControl& control_;
   std::string map_path_;
   std::atomic<bool> done_{false};
   std::thread thread_;
@@ -100,7 +100,7 @@ struct MapOptions {
 
 // The map's folder is created if missing and must be writable: better to refuse at once than to
 // find out at the first checkpoint, after mapping for a while.
-void checkOutputFolder(const std::string &map_path) {
+void checkOutputFolder(const std::string& map_path) {
   namespace fs = std::filesystem;
   const fs::path folder = fs::path(map_path).parent_path();
   if (folder.empty()) return;
@@ -113,25 +113,24 @@ void checkOutputFolder(const std::string &map_path) {
                               " is not writable");
 }
 
-int runMapping(const MapOptions &o) {
+int runMapping(const MapOptions& o) {
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
-    for (const Config::Key &k : config.keys())
+    for (const Config::Key& k : config.keys())
       std::printf("%-28s %-12s %s\n", k.name.c_str(), k.get().c_str(), k.help.c_str());
     return 0;
   }
   if (o.source.empty()) {
     spdlog::error(
-        "no --source given (tum:DIR, openni2, openni2:URI or "
-        "openni2:FILE.oni); "
-        "`rgbdmap synth --out DIR` makes a sequence to try");
+        "no --source given (tum:DIR, openni2, openni2:URI or openni2:FILE.oni); `rgbdmap synth "
+        "--out DIR` makes a sequence to try");
     return 2;
   }
   checkOutputFolder(o.out);
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
-  for (const std::string &s : o.sets) {
+  for (const std::string& s : o.sets) {
     const auto eq = s.find('=');
     if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
@@ -140,9 +139,9 @@ int runMapping(const MapOptions &o) {
   if (config.pose_source == "auto")
     config.pose_source = source->providesPoses() ? "groundtruth" : "odometry";
   if (config.pose_source == "groundtruth" && !source->providesPoses())
-    throw InputError(source->describe() +
-                     ": has no ground truth poses; use --set pose.source=odometry "
-                     "or pose.source=trajectory");
+    throw InputError(
+        source->describe() +
+        ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
 
   PipelineOutputs outputs;
   outputs.map_path = o.out;
@@ -175,7 +174,7 @@ int runMapping(const MapOptions &o) {
 
 }  // namespace
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   // Before any thread exists, so all inherit the mask.
   SignalThread::blockInThisThread();
   // spdlog creates its registry on first use: do it here, before any thread can log.
@@ -207,17 +206,17 @@ int main(int argc, char **argv) {
 
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError &e) {
+  } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
   try {
     if (!selected) return runMapping(o);
     SignalThread::unblockInThisThread();
     return selected();
-  } catch (const rgbdmap::InputError &e) {
+  } catch (const rgbdmap::InputError& e) {
     spdlog::error("{}", e.what());
     return 2;
-  } catch (const std::exception &e) {
+  } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;
   }

@@ -20,7 +20,7 @@ struct Outcome {
   std::string output;
 };
 
-Outcome map(const std::string &folder, const std::string &out_dir, const std::string &extra = "") {
+Outcome map(const std::string& folder, const std::string& out_dir, const std::string& extra = "") {
   Outcome o;
   o.exit_code = test::run(test::binary() + " --source tum:" + folder + " --out " + out_dir +
                               "/map.pcd --rate max -q --no-render --stats " + out_dir +
@@ -30,17 +30,17 @@ Outcome map(const std::string &folder, const std::string &out_dir, const std::st
 }
 
 // Replaces line `number` (1-based) of a text file.
-void replaceLine(const std::string &path, std::size_t number, const std::string &text) {
+void replaceLine(const std::string& path, std::size_t number, const std::string& text) {
   std::ifstream in(path);
   std::vector<std::string> lines;
   for (std::string l; std::getline(in, l);) lines.push_back(l);
   ASSERT_LE(number, lines.size());
   lines[number - 1] = text;
   std::ofstream out(path);
-  for (const auto &l : lines) out << l << "\n";
+  for (const auto& l : lines) out << l << "\n";
 }
 
-std::string statsOf(const std::string &dir) { return test::readFile(dir + "/stats.json"); }
+std::string statsOf(const std::string& dir) { return test::readFile(dir + "/stats.json"); }
 
 TEST(BadInput, MissingFolder) {
   const std::string dir = test::freshDir();
@@ -112,12 +112,12 @@ class BadImage : public ::testing::Test {
     dir_ = test::freshDir();
     seq_ = dir_ + "/seq";
     fs::create_directories(seq_);
-    for (const char *list : {"rgb.txt", "depth.txt", "groundtruth.txt"})
+    for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"})
       fs::copy_file(test::tumDir(kXyz) + "/" + list, seq_ + "/" + list);
     fs::copy(test::tumDir(kXyz) + "/rgb", seq_ + "/rgb");
     fs::copy(test::tumDir(kXyz) + "/depth", seq_ + "/depth");
   }
-  void expectOneSkipped(const std::string &what) {
+  void expectOneSkipped(const std::string& what) {
     const Outcome o = map(seq_, dir_);
     EXPECT_EQ(o.exit_code, 0) << o.output;
     EXPECT_NE(o.output.find(what), std::string::npos) << o.output;
@@ -198,11 +198,10 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
   const std::string truncated = dir + "/truncated.pcd";
   {
     std::ofstream out(truncated, std::ios::binary);
-    out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 "
-           "1\nWIDTH 100\n"
-           "HEIGHT 1\nPOINTS 100\nDATA binary\nabc";
+    out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100\nHEIGHT "
+           "1\nPOINTS 100\nDATA binary\nabc";
   }
-  for (const std::string &path : {garbage, truncated}) {
+  for (const std::string& path : {garbage, truncated}) {
     std::string output;
     const int code =
         test::run(test::binary() + " render " + path + " --out " + dir + "/x.png", &output);

@@ -34,7 +34,7 @@ const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
 const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
 
 // A counter from `--stats` JSON ("name": value).
-double statValue(const std::string &json, const std::string &name) {
+double statValue(const std::string& json, const std::string& name) {
   const auto at = json.find("\"" + name + "\":");
   if (at == std::string::npos) {
     ADD_FAILURE() << "no " << name << " in " << json;
@@ -45,7 +45,7 @@ double statValue(const std::string &json, const std::string &name) {
 
 // Every listed image of a recorded folder exists, decodes, and the two lists
 // pair one to one.
-void expectCompleteRecording(const std::string &dir, std::size_t expected_frames) {
+void expectCompleteRecording(const std::string& dir, std::size_t expected_frames) {
   const TumSequence sequence(dir);
   EXPECT_EQ(sequence.size(), expected_frames);
   EXPECT_EQ(sequence.unmatchedColor(), 0u);
@@ -57,7 +57,7 @@ void expectCompleteRecording(const std::string &dir, std::size_t expected_frames
     ASSERT_EQ(depth.type(), CV_16UC1) << sequence[i].depth_path;
     ASSERT_EQ(color.type(), CV_8UC3) << sequence[i].rgb_path;
   }
-  for (const auto &entry : fs::recursive_directory_iterator(dir))
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
     EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
 }
 
@@ -379,18 +379,18 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
   ASSERT_GT(a.size(), 50000u);
   EXPECT_NEAR(static_cast<double>(a.size()), static_cast<double>(b.size()), 1e-4 * b.size());
   // One point per 1 cm voxel: pair the points by voxel.
-  auto voxel = [](const pcl::PointXYZRGB &p) {
+  auto voxel = [](const pcl::PointXYZRGB& p) {
     return std::array<long, 3>{std::lround(std::floor(p.x / 0.01f)),
                                std::lround(std::floor(p.y / 0.01f)),
                                std::lround(std::floor(p.z / 0.01f))};
   };
   std::map<std::array<long, 3>, pcl::PointXYZRGB> by_voxel;
-  for (const auto &p : a.points) by_voxel.emplace(voxel(p), p);
+  for (const auto& p : a.points) by_voxel.emplace(voxel(p), p);
   std::size_t same = 0;
-  for (const auto &q : b.points) {
+  for (const auto& q : b.points) {
     const auto found = by_voxel.find(voxel(q));
     if (found == by_voxel.end()) continue;
-    const pcl::PointXYZRGB &p = found->second;
+    const pcl::PointXYZRGB& p = found->second;
     same += (p.getVector3fMap() - q.getVector3fMap()).cwiseAbs().maxCoeff() < 1e-4f &&
             std::abs(int(p.r) - int(q.r)) <= 1 && std::abs(int(p.g) - int(q.g)) <= 1 &&
             std::abs(int(p.b) - int(q.b)) <= 1;

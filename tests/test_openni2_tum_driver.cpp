@@ -58,7 +58,7 @@ struct ReadFrame {
 
 // Reads up to `count` frames from whichever stream is ready first; stops early
 // when no frame comes within `timeout_ms`.
-std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams, std::size_t count,
+std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream*> streams, std::size_t count,
                                   int timeout_ms = 3000) {
   std::vector<ReadFrame> frames;
   while (frames.size() < count) {
@@ -79,7 +79,7 @@ std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams, st
     frame.crop_x = ref.getCropOriginX();
     frame.crop_y = ref.getCropOriginY();
     const int type = frame.sensor == openni::SENSOR_DEPTH ? CV_16UC1 : CV_8UC3;
-    frame.image = cv::Mat(frame.height, frame.width, type, const_cast<void *>(ref.getData()),
+    frame.image = cv::Mat(frame.height, frame.width, type, const_cast<void*>(ref.getData()),
                           static_cast<std::size_t>(ref.getStrideInBytes()))
                       .clone();
     frames.push_back(std::move(frame));
@@ -87,9 +87,9 @@ std::vector<ReadFrame> readFrames(std::vector<openni::VideoStream *> streams, st
   return frames;
 }
 
-std::vector<ReadFrame> ofSensor(const std::vector<ReadFrame> &frames, openni::SensorType sensor) {
+std::vector<ReadFrame> ofSensor(const std::vector<ReadFrame>& frames, openni::SensorType sensor) {
   std::vector<ReadFrame> selected;
-  for (const ReadFrame &f : frames)
+  for (const ReadFrame& f : frames)
     if (f.sensor == sensor) selected.push_back(f);
   return selected;
 }
@@ -99,14 +99,14 @@ std::uint64_t microseconds(double seconds) {
 }
 
 // The 16-bit depth PNG of entry i, read directly.
-cv::Mat rawDepth(const TumSequence &sequence, std::size_t i) {
+cv::Mat rawDepth(const TumSequence& sequence, std::size_t i) {
   cv::Mat raw = cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED);
   EXPECT_EQ(raw.type(), CV_16UC1) << sequence[i].depth_path;
   return raw;
 }
 
 // The colour of entry i as TumSequence decodes it, in OpenNI2's RGB order.
-cv::Mat rgbColor(TumSequence &sequence, std::size_t i) {
+cv::Mat rgbColor(TumSequence& sequence, std::size_t i) {
   Frame frame;
   std::string error;
   EXPECT_TRUE(sequence.load(i, frame, error)) << error;
@@ -117,7 +117,7 @@ cv::Mat rgbColor(TumSequence &sequence, std::size_t i) {
 
 // What the plugin must deliver for a TUM value in 100 um: 2 x value (0.2 mm = 2
 // x 100 um), and 0 (no measurement) beyond the 16 bits the format has.
-cv::Mat expectedDepth100um(const cv::Mat &raw) {
+cv::Mat expectedDepth100um(const cv::Mat& raw) {
   cv::Mat expected(raw.size(), CV_16UC1);
   for (int y = 0; y < raw.rows; ++y)
     for (int x = 0; x < raw.cols; ++x) {
@@ -128,7 +128,7 @@ cv::Mat expectedDepth100um(const cv::Mat &raw) {
 }
 
 // Millimetres: value / 5 rounded to nearest (value / 5 never ends in .5).
-cv::Mat expectedDepthMm(const cv::Mat &raw) {
+cv::Mat expectedDepthMm(const cv::Mat& raw) {
   cv::Mat expected(raw.size(), CV_16UC1);
   for (int y = 0; y < raw.rows; ++y)
     for (int x = 0; x < raw.cols; ++x)
@@ -138,16 +138,16 @@ cv::Mat expectedDepthMm(const cv::Mat &raw) {
 }
 
 // Number of differing elements; 0 when equal (sizes and types must match).
-int differences(const cv::Mat &a, const cv::Mat &b) {
+int differences(const cv::Mat& a, const cv::Mat& b) {
   if (a.size() != b.size() || a.type() != b.type()) return -1;
   cv::Mat diff;
   cv::compare(a.reshape(1), b.reshape(1), diff, cv::CMP_NE);
   return cv::countNonZero(diff);
 }
 
-const openni::VideoMode *findMode(const openni::SensorInfo *sensor, openni::PixelFormat format) {
+const openni::VideoMode* findMode(const openni::SensorInfo* sensor, openni::PixelFormat format) {
   if (sensor == nullptr) return nullptr;
-  const openni::Array<openni::VideoMode> &modes = sensor->getSupportedVideoModes();
+  const openni::Array<openni::VideoMode>& modes = sensor->getSupportedVideoModes();
   for (int i = 0; i < modes.getSize(); ++i)
     if (modes[i].getPixelFormat() == format) return &modes[i];
   return nullptr;
@@ -155,7 +155,7 @@ const openni::VideoMode *findMode(const openni::SensorInfo *sensor, openni::Pixe
 
 std::string loadedOpenNI2() {
   Dl_info info{};
-  if (dladdr(reinterpret_cast<void *>(&oniInitialize), &info) == 0 || info.dli_fname == nullptr)
+  if (dladdr(reinterpret_cast<void*>(&oniInitialize), &info) == 0 || info.dli_fname == nullptr)
     return "(unknown)";
   return info.dli_fname;
 }
@@ -168,18 +168,18 @@ std::vector<std::string> enumeratedUris() {
   return uris;
 }
 
-bool contains(const std::vector<std::string> &list, const std::string &item) {
+bool contains(const std::vector<std::string>& list, const std::string& item) {
   return std::find(list.begin(), list.end(), item) != list.end();
 }
 
-void replaceLine(const std::string &path, std::size_t number, const std::string &text) {
+void replaceLine(const std::string& path, std::size_t number, const std::string& text) {
   std::ifstream in(path);
   std::vector<std::string> lines;
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   ASSERT_LE(number, lines.size()) << path;
   lines[number - 1] = text;
   std::ofstream out(path, std::ios::trunc);
-  for (const std::string &line : lines) out << line << "\n";
+  for (const std::string& line : lines) out << line << "\n";
 }
 
 // Records OpenNI2's device connected/disconnected events for one URI.
@@ -194,8 +194,8 @@ class PlugEvents : public openni::OpenNI::DeviceConnectedListener,
     openni::OpenNI::removeDeviceConnectedListener(this);
     openni::OpenNI::removeDeviceDisconnectedListener(this);
   }
-  void onDeviceConnected(const openni::DeviceInfo *info) override { record(info, connected_); }
-  void onDeviceDisconnected(const openni::DeviceInfo *info) override {
+  void onDeviceConnected(const openni::DeviceInfo* info) override { record(info, connected_); }
+  void onDeviceDisconnected(const openni::DeviceInfo* info) override {
     record(info, disconnected_);
   }
   // Waits until `count` connections (or disconnections) were seen; false on
@@ -212,13 +212,13 @@ class PlugEvents : public openni::OpenNI::DeviceConnectedListener,
   }
 
  private:
-  void record(const openni::DeviceInfo *info, int &counter) {
+  void record(const openni::DeviceInfo* info, int& counter) {
     if (info == nullptr || uri_ != info->getUri()) return;
     std::lock_guard<std::mutex> lock(mutex_);
     ++counter;
     changed_.notify_all();
   }
-  bool waitFor(const int &counter, int count, std::chrono::milliseconds timeout) {
+  bool waitFor(const int& counter, int count, std::chrono::milliseconds timeout) {
     std::unique_lock<std::mutex> lock(mutex_);
     return changed_.wait_for(lock, timeout, [&] { return counter >= count; });
   }
@@ -239,8 +239,8 @@ class OpenNI2TumDriver : public ::testing::Test {
     ASSERT_EQ(::setenv("RGBDMAP_TUM_DEVICES", listed.c_str(), 1), 0);
     const std::string runtime = loadedOpenNI2();
     ASSERT_EQ(fs::path(runtime).parent_path(), fs::path(RGBDMAP_OPENNI2_PRIVATE_DIR))
-        << "this program must load the private OpenNI2 runtime (build target "
-           "openni2_tum_runtime) but loaded "
+        << "this program must load the private OpenNI2 runtime (build target openni2_tum_runtime) "
+           "but loaded "
         << runtime;
     ASSERT_EQ(openni::OpenNI::initialize(), openni::STATUS_OK)
         << openni::OpenNI::getExtendedError();
@@ -261,7 +261,7 @@ struct Playback {
   double seconds = 0;
 };
 
-Playback playOnce(const std::string &folder) {
+Playback playOnce(const std::string& folder) {
   Playback play;
   openni::Device device;
   EXPECT_EQ(device.open(("tum:" + folder).c_str()), openni::STATUS_OK)
@@ -320,9 +320,9 @@ TEST_F(OpenNI2TumDriver, FramesAreBitIdenticalToTheFolderAtTheRecordedTiming) {
     // as possible.
     EXPECT_GE(play.seconds, 0.9 * recorded);
     EXPECT_EQ(play.depths.back().index, static_cast<int>(sequence.size()));
-    for (const std::vector<ReadFrame> *frames : {&play.depths, &play.colors}) {
+    for (const std::vector<ReadFrame>* frames : {&play.depths, &play.colors}) {
       int previous = 0;
-      for (const ReadFrame &frame : *frames) {
+      for (const ReadFrame& frame : *frames) {
         // Indices count from 1 and only ever increase; a gap is a frame lost to
         // a stall.
         ASSERT_GT(frame.index, previous);
@@ -363,7 +363,7 @@ TEST_F(OpenNI2TumDriver, MillimetreModeIsTheSameDepthRounded) {
   ASSERT_EQ(device.open(("tum:" + test::tumDir(kXyz)).c_str()), openni::STATUS_OK);
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
-  const openni::VideoMode *mm =
+  const openni::VideoMode* mm =
       findMode(device.getSensorInfo(openni::SENSOR_DEPTH), openni::PIXEL_FORMAT_DEPTH_1_MM);
   ASSERT_NE(mm, nullptr) << "no millimetre mode offered";
   ASSERT_EQ(depth.setVideoMode(*mm), openni::STATUS_OK);
@@ -388,7 +388,7 @@ TEST_F(OpenNI2TumDriver, FieldOfViewComesFromTheFolderCameraPreset) {
   // ones. The values must be those of config/*.yaml.
   const std::string renamed =
       test::copySequence(test::tumDir(kXyz), test::freshDir() + "/my_recording");
-  for (const auto &[folder, preset] :
+  for (const auto& [folder, preset] :
        {std::pair<std::string, std::string>{test::tumDir(kXyz), "tum_fr1"}, {renamed, "default"}}) {
     SCOPED_TRACE(folder);
     Config config;
@@ -614,7 +614,7 @@ TEST_F(OpenNI2TumDriver, PrivateRuntimeKeepsTheSystemDrivers) {
   // runtime. (Playing the .oni here is left to the OpenNI2 source's tests:
   // Debian's OniFile cancels its player thread on close, which crashes a good
   // share of runs in OniFile itself.)
-  for (const char *driver : {"libOniFile.so.0", "libPS1080.so.0"})
+  for (const char* driver : {"libOniFile.so.0", "libPS1080.so.0"})
     EXPECT_TRUE(fs::exists(fs::path(RGBDMAP_OPENNI2_PRIVATE_DIR) / "OpenNI2/Drivers" / driver))
         << driver;
 }

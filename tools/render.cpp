@@ -13,7 +13,7 @@
 namespace rgbdmap {
 namespace {
 
-bool exists(const std::string &path) {
+bool exists(const std::string& path) {
   struct stat st {};
   return ::stat(path.c_str(), &st) == 0;
 }
@@ -21,15 +21,15 @@ bool exists(const std::string &path) {
 // Where the virtual camera stands: looking along the mean camera direction of
 // the trajectory (or the cloud's least-spread axis when there is none), pulled
 // back so the map fits.
-Eigen::Isometry3d chooseView(const MapCloud &cloud, const Trajectory &trajectory, double fov) {
+Eigen::Isometry3d chooseView(const MapCloud& cloud, const Trajectory& trajectory, double fov) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto &p : cloud) centroid += p.getVector3fMap().cast<double>();
+  for (const auto& p : cloud) centroid += p.getVector3fMap().cast<double>();
   centroid /= static_cast<double>(std::max<std::size_t>(cloud.size(), 1));
 
   Eigen::Vector3d forward(0, 0, 1), down(0, 1, 0);
   if (!trajectory.empty()) {
     Eigen::Vector3d f = Eigen::Vector3d::Zero(), d = Eigen::Vector3d::Zero();
-    for (const StampedPose &p : trajectory.poses()) {
+    for (const StampedPose& p : trajectory.poses()) {
       f += p.pose.linear().col(2);
       d += p.pose.linear().col(1);
     }
@@ -46,7 +46,7 @@ Eigen::Isometry3d chooseView(const MapCloud &cloud, const Trajectory &trajectory
   // field of view.
   std::vector<double> radii;
   radii.reserve(cloud.size());
-  for (const auto &p : cloud)
+  for (const auto& p : cloud)
     radii.push_back((p.getVector3fMap().cast<double>() - centroid).norm());
   double radius = 1.0;
   if (!radii.empty()) {
@@ -66,21 +66,21 @@ Eigen::Isometry3d chooseView(const MapCloud &cloud, const Trajectory &trajectory
 
 }  // namespace
 
-cv::Mat MapRenderer::render(const MapCloud &cloud, const Trajectory &trajectory) const {
+cv::Mat MapRenderer::render(const MapCloud& cloud, const Trajectory& trajectory) const {
   cv::Mat image(height, width, CV_8UC3, cv::Scalar(40, 40, 40));
   cv::Mat zbuffer(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
   const Eigen::Isometry3d view = chooseView(cloud, trajectory, fov_degrees);
   const Eigen::Isometry3d world_to_view = view.inverse();
   const double f = 0.5 * width / std::tan(fov_degrees * M_PI / 360.0);
   const double cx = 0.5 * width, cy = 0.5 * height;
-  auto project = [&](const Eigen::Vector3d &w, cv::Point2d &px, double &z) {
+  auto project = [&](const Eigen::Vector3d& w, cv::Point2d& px, double& z) {
     const Eigen::Vector3d c = world_to_view * w;
     if (c.z() <= 0.05) return false;
     px = {f * c.x() / c.z() + cx, f * c.y() / c.z() + cy};
     z = c.z();
     return true;
   };
-  for (const auto &p : cloud) {
+  for (const auto& p : cloud) {
     cv::Point2d px;
     double z;
     if (!project(p.getVector3fMap().cast<double>(), px, z)) continue;
@@ -89,7 +89,7 @@ cv::Mat MapRenderer::render(const MapCloud &cloud, const Trajectory &trajectory)
       if (v < 0 || v >= height) continue;
       for (int u = u0 - point_radius; u <= u0 + point_radius; ++u) {
         if (u < 0 || u >= width) continue;
-        float &depth = zbuffer.at<float>(v, u);
+        float& depth = zbuffer.at<float>(v, u);
         if (z >= depth) continue;
         depth = static_cast<float>(z);
         image.at<cv::Vec3b>(v, u) = cv::Vec3b(p.b, p.g, p.r);
@@ -108,12 +108,12 @@ cv::Mat MapRenderer::render(const MapCloud &cloud, const Trajectory &trajectory)
   return image;
 }
 
-bool renderMapFile(const std::string &map_path, const std::string &trajectory_path,
-                   const std::string &png_path, const MapRenderer &renderer, std::string &error) {
+bool renderMapFile(const std::string& map_path, const std::string& trajectory_path,
+                   const std::string& png_path, const MapRenderer& renderer, std::string& error) {
   MapCloud cloud;
   try {
     cloud = loadMapFile(map_path);  // checks the header first: PCL crashes on some garbage
-  } catch (const std::exception &e) {
+  } catch (const std::exception& e) {
     error = e.what();
     return false;
   }
@@ -121,7 +121,7 @@ bool renderMapFile(const std::string &map_path, const std::string &trajectory_pa
   if (!trajectory_path.empty() && exists(trajectory_path)) {
     try {
       trajectory = Trajectory::load(trajectory_path);
-    } catch (const std::exception &e) {
+    } catch (const std::exception& e) {
       error = e.what();
       return false;
     }
@@ -131,15 +131,15 @@ bool renderMapFile(const std::string &map_path, const std::string &trajectory_pa
       error = png_path + ": cannot write image";
       return false;
     }
-  } catch (const cv::Exception &e) {
+  } catch (const cv::Exception& e) {
     error = png_path + ": cannot write image (" + e.err + ")";
     return false;
   }
   return true;
 }
 
-void addRenderCommand(CLI::App &app, Command &selected) {
-  auto *cmd = app.add_subcommand("render", "render a map (PCD/PLY) to a PNG picture, headless");
+void addRenderCommand(CLI::App& app, Command& selected) {
+  auto* cmd = app.add_subcommand("render", "render a map (PCD/PLY) to a PNG picture, headless");
   struct Options {
     std::string map, trajectory, out;
     MapRenderer renderer;
