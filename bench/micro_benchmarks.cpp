@@ -9,15 +9,15 @@
 #include <stdexcept>
 #include <string>
 
-#include "rgbdmap/back_projector.hpp"
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/depth_filter.hpp"
-#include "rgbdmap/depth_smoother.hpp"
-#include "rgbdmap/frame.hpp"
-#include "rgbdmap/keyframe_integrator.hpp"
-#include "rgbdmap/run_stats.hpp"
-#include "rgbdmap/tum_sequence.hpp"
-#include "rgbdmap/voxel_map.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/mapping/back_projector.hpp"
+#include "rgbdmap/mapping/depth_filter.hpp"
+#include "rgbdmap/mapping/depth_smoother.hpp"
+#include "rgbdmap/mapping/keyframe_integrator.hpp"
+#include "rgbdmap/mapping/voxel_map.hpp"
 
 namespace {
 

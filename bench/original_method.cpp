@@ -31,11 +31,11 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/run_stats.hpp"
-#include "rgbdmap/source_factory.hpp"
-#include "rgbdmap/tum_sequence.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/runtime/source_factory.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "rgbdmap/openni2_source.hpp"
+#include "rgbdmap/drivers/openni2_source.hpp"
 
 #include <OpenNI.h>
 #include <spdlog/spdlog.h>
@@ -13,8 +13,8 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/usb_cameras.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/drivers/usb_cameras.hpp"
 
 namespace rgbdmap {
 namespace {

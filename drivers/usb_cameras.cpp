@@ -1,4 +1,4 @@
-#include "rgbdmap/usb_cameras.hpp"
+#include "rgbdmap/drivers/usb_cameras.hpp"
 
 #include <OniCAPI.h>
 #include <dlfcn.h>
@@ -44,19 +44,20 @@ bool openni2HasDriver(const std::string& stem) {
 void diagnose(UsbCamera& camera) {
   if (camera.open_error == LIBUSB_ERROR_ACCESS) {
     camera.problem = "no permission to open it (LIBUSB_ERROR_ACCESS)";
-    camera.advice = "install the udev rule, then unplug and replug the camera: " +
-                    udevInstallCommands();
+    camera.advice =
+        "install the udev rule, then unplug and replug the camera: " + udevInstallCommands();
     return;
   }
   if (camera.open_error == LIBUSB_ERROR_BUSY) {
     camera.problem = "it is in use (LIBUSB_ERROR_BUSY)";
-    camera.advice = "close the other program that uses it (or unload the gspca_kinect kernel "
-                    "module for a Kinect v1: sudo modprobe -r gspca_kinect)";
+    camera.advice =
+        "close the other program that uses it (or unload the gspca_kinect kernel "
+        "module for a Kinect v1: sudo modprobe -r gspca_kinect)";
     return;
   }
   if (camera.open_error != 0) {
-    camera.problem = std::string("libusb cannot open it (") +
-                     libusb_error_name(camera.open_error) + ")";
+    camera.problem =
+        std::string("libusb cannot open it (") + libusb_error_name(camera.open_error) + ")";
     camera.advice = "unplug and replug it; check `dmesg` for USB errors";
     return;
   }
@@ -66,17 +67,20 @@ void diagnose(UsbCamera& camera) {
                      " has no libFreenectDriver)";
     camera.advice =
         "build libfreenect's OpenNI2 driver (cmake -DBUILD_OPENNI2_DRIVER=ON in the libfreenect "
-        "sources) and install it as " + openni2DriverDirectory() +
+        "sources) and install it as " +
+        openni2DriverDirectory() +
         "/libFreenectDriver.so.0 (Debian's OpenNI2 only loads lib*.so.0 files there)";
   } else if (camera.vendor_id == kOrbbec && !openni2HasDriver("libOrbbec")) {
     camera.problem = "OpenNI2 has no driver for Orbbec cameras (" + openni2DriverDirectory() +
                      " has no libOrbbec)";
-    camera.advice = "install libOrbbec.so from Orbbec's OpenNI2 SDK into that folder as "
-                    "libOrbbec.so.0";
+    camera.advice =
+        "install libOrbbec.so from Orbbec's OpenNI2 SDK into that folder as "
+        "libOrbbec.so.0";
   } else if (camera.vendor_id == kPrimeSense) {
-    camera.advice = "if OpenNI2 still cannot stream from it: use a USB 2 port (Xtions fail on "
-                    "many USB 3 ports) and no other streaming device on the same controller "
-                    "(a PrimeSense camera reserves most of a USB 2 bus)";
+    camera.advice =
+        "if OpenNI2 still cannot stream from it: use a USB 2 port (Xtions fail on "
+        "many USB 3 ports) and no other streaming device on the same controller "
+        "(a PrimeSense camera reserves most of a USB 2 bus)";
   }
 }
 
@@ -89,10 +93,11 @@ std::string UsbCamera::ids() const {
 }
 
 std::string UsbCamera::describe() const {
-  std::string line = model + " " + ids() + " on bus " + std::to_string(bus) + " port " +
-                     port_path + " (address " + std::to_string(address) + "): ";
-  line += open_error == 0 ? "this user can open it"
-                          : std::string("this user cannot open it: ") + libusb_error_name(open_error);
+  std::string line = model + " " + ids() + " on bus " + std::to_string(bus) + " port " + port_path +
+                     " (address " + std::to_string(address) + "): ";
+  line += open_error == 0
+              ? "this user can open it"
+              : std::string("this user cannot open it: ") + libusb_error_name(open_error);
   return line;
 }
 
@@ -114,8 +119,8 @@ UsbScan scanUsbCameras() {
   libusb_device** list = nullptr;
   const ssize_t count = libusb_get_device_list(context.get(), &list);
   if (count < 0) {
-    scan.bus_error = std::string("cannot list USB devices: ") +
-                     libusb_error_name(static_cast<int>(count));
+    scan.bus_error =
+        std::string("cannot list USB devices: ") + libusb_error_name(static_cast<int>(count));
     return scan;
   }
   scan.bus_readable = true;
@@ -134,8 +139,7 @@ UsbScan scanUsbCameras() {
     std::uint8_t ports[8];
     const int depth = libusb_get_port_numbers(device, ports, sizeof ports);
     camera.port_path = std::to_string(camera.bus) + "-";
-    for (int p = 0; p < depth; ++p)
-      camera.port_path += (p ? "." : "") + std::to_string(ports[p]);
+    for (int p = 0; p < depth; ++p) camera.port_path += (p ? "." : "") + std::to_string(ports[p]);
     libusb_device_handle* handle = nullptr;
     camera.open_error = libusb_open(device, &handle);
     if (handle) libusb_close(handle);

@@ -9,12 +9,12 @@
 #include <fstream>
 #include <thread>
 
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/map_renderer.hpp"
-#include "rgbdmap/pipeline.hpp"
-#include "rgbdmap/source_factory.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/pipeline.hpp"
+#include "rgbdmap/runtime/source_factory.hpp"
+#include "rgbdmap/tools/commands.hpp"
+#include "rgbdmap/tools/map_renderer.hpp"
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include <random>
 #include <thread>
 
-#include "rgbdmap/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -79,7 +79,8 @@ TEST(AtomicWrite, DiskFullKeepsThePreviousMap) {
   int status = 0;
   ::waitpid(child, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "1: the write claimed success, 2: the error did not name the file";
+  EXPECT_EQ(WEXITSTATUS(status), 0)
+      << "1: the write claimed success, 2: the error did not name the file";
   EXPECT_EQ(test::loadMap(path).size(), 10u);
   for (const auto& entry : fs::directory_iterator(dir)) EXPECT_EQ(entry.path(), path);
 }

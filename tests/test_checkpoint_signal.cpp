@@ -11,7 +11,7 @@
 #include <random>
 #include <thread>
 
-#include "rgbdmap/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -22,9 +22,20 @@ using namespace std::chrono_literals;
 const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
 
 std::vector<std::string> replayArgs(const std::string& dir, const std::string& rate) {
-  return {test::binary(), "--source", "tum:" + test::tumDir(kRpy), "--out", dir + "/map.pcd",
-          "--rate", rate, "--no-render", "--stats", dir + "/stats.json",
-          "--set", "checkpoint.every_keyframes=0", "--set", "checkpoint.every_seconds=0"};
+  return {test::binary(),
+          "--source",
+          "tum:" + test::tumDir(kRpy),
+          "--out",
+          dir + "/map.pcd",
+          "--rate",
+          rate,
+          "--no-render",
+          "--stats",
+          dir + "/stats.json",
+          "--set",
+          "checkpoint.every_keyframes=0",
+          "--set",
+          "checkpoint.every_seconds=0"};
 }
 
 bool waitFor(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {
@@ -41,12 +52,16 @@ TEST(CheckpointSignal, Sigusr1WritesCompleteMapWhileMapping) {
   // Half speed: 100 frames take ~6.6 s, long enough to observe a checkpoint mid-run.
   test::Process p(replayArgs(dir, "0.5"), dir + "/log.txt");
   ASSERT_GT(p.pid(), 0);
-  ASSERT_TRUE(waitFor([&] { return test::readFile(dir + "/log.txt").find("keyframes") != std::string::npos ||
-                                   test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; },
-                      20s));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return test::readFile(dir + "/log.txt").find("keyframes") != std::string::npos ||
+               test::readFile(dir + "/log.txt").find("poses:") != std::string::npos;
+      },
+      20s));
   std::this_thread::sleep_for(1500ms);
   p.signal(SIGUSR1);
-  ASSERT_TRUE(waitFor([&] { return fs::exists(dir + "/map.pcd"); }, 5s)) << test::readFile(dir + "/log.txt");
+  ASSERT_TRUE(waitFor([&] { return fs::exists(dir + "/map.pcd"); }, 5s))
+      << test::readFile(dir + "/log.txt");
   const bool still_running = p.running();
   MapCloud checkpoint;
   ASSERT_EQ(pcl::io::loadPCDFile(dir + "/map.pcd", checkpoint), 0);
@@ -56,15 +71,18 @@ TEST(CheckpointSignal, Sigusr1WritesCompleteMapWhileMapping) {
   EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
   const MapCloud final_map = test::loadMap(dir + "/map.pcd");
   EXPECT_GE(final_map.size(), checkpoint.size());
-  EXPECT_NE(test::readFile(dir + "/log.txt").find("SIGUSR1: writing a checkpoint"), std::string::npos);
-  EXPECT_NE(test::readFile(dir + "/stats.json").find("\"checkpoints_written\": 2,"), std::string::npos)
+  EXPECT_NE(test::readFile(dir + "/log.txt").find("SIGUSR1: writing a checkpoint"),
+            std::string::npos);
+  EXPECT_NE(test::readFile(dir + "/stats.json").find("\"checkpoints_written\": 2,"),
+            std::string::npos)
       << test::readFile(dir + "/stats.json");  // the SIGUSR1 one and the final save
 }
 
 TEST(CheckpointSignal, SigintStopsDrainsAndSaves) {
   const std::string dir = test::freshDir();
   test::Process p(replayArgs(dir, "1"), dir + "/log.txt");
-  ASSERT_TRUE(waitFor([&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 20s));
+  ASSERT_TRUE(waitFor(
+      [&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 20s));
   std::this_thread::sleep_for(1000ms);
   p.signal(SIGINT);
   EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
@@ -85,10 +103,11 @@ TEST(CheckpointSignal, SigintStopsDrainsAndSaves) {
 TEST(CheckpointSignal, PeriodicCheckpointsByKeyframeCount) {
   const std::string dir = test::freshDir();
   std::string output;
-  const int code = test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
-                                 "/map.pcd --rate max -q --no-render --stats " + dir +
-                                 "/stats.json --set checkpoint.every_keyframes=3 --set checkpoint.every_seconds=0",
-                             &output);
+  const int code = test::run(
+      test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+          "/map.pcd --rate max -q --no-render --stats " + dir +
+          "/stats.json --set checkpoint.every_keyframes=3 --set checkpoint.every_seconds=0",
+      &output);
   ASSERT_EQ(code, 0) << output;
   // 10 keyframes: checkpoints after keyframes 3, 6 and 9, then the final save. The writer keeps
   // only the newest pending snapshot, so a fast replay may merge some: between 2 and 4.
@@ -101,7 +120,8 @@ TEST(CheckpointSignal, PeriodicCheckpointsByKeyframeCount) {
 TEST(CheckpointSignal, SecondSigintQuitsWithoutPartialFile) {
   const std::string dir = test::freshDir();
   test::Process p(replayArgs(dir, "1"), dir + "/log.txt");
-  ASSERT_TRUE(waitFor([&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 20s));
+  ASSERT_TRUE(waitFor(
+      [&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 20s));
   std::this_thread::sleep_for(800ms);
   p.signal(SIGINT);
   std::this_thread::sleep_for(5ms);

@@ -2,8 +2,8 @@
 
 #include <fstream>
 
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/error.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/error.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -32,15 +32,22 @@ TEST(Config, SetsKeysFromText) {
 
 TEST(Config, RejectsUnknownKeysAndBadValuesNamingTheKey) {
   Config c;
-  EXPECT_NE(messageOf([&] { c.set("map.voxelsize", "0.01", "--set"); }).find("unknown config key 'map.voxelsize'"),
+  EXPECT_NE(messageOf([&] {
+              c.set("map.voxelsize", "0.01", "--set");
+            }).find("unknown config key 'map.voxelsize'"),
             std::string::npos);
   const std::string range = messageOf([&] { c.set("map.voxel_size", "-1", "--set"); });
   EXPECT_NE(range.find("map.voxel_size"), std::string::npos);
   EXPECT_NE(range.find("outside"), std::string::npos);
-  EXPECT_NE(messageOf([&] { c.set("keyframe.every_n", "ten", "--set"); }).find("not an integer"), std::string::npos);
-  EXPECT_NE(messageOf([&] { c.set("keyframe.every_n", "0", "--set"); }).find("keyframe.every_n"), std::string::npos);
-  EXPECT_NE(messageOf([&] { c.set("pose.source", "magic", "--set"); }).find("not one of"), std::string::npos);
-  EXPECT_NE(messageOf([&] { c.set("filter.min_depth", "9", "--set"); }).find("below filter.max_depth"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("keyframe.every_n", "ten", "--set"); }).find("not an integer"),
+            std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("keyframe.every_n", "0", "--set"); }).find("keyframe.every_n"),
+            std::string::npos);
+  EXPECT_NE(messageOf([&] { c.set("pose.source", "magic", "--set"); }).find("not one of"),
+            std::string::npos);
+  EXPECT_NE(
+      messageOf([&] { c.set("filter.min_depth", "9", "--set"); }).find("below filter.max_depth"),
+      std::string::npos);
   EXPECT_DOUBLE_EQ(c.voxel_size, 0.01);  // a rejected value leaves the old one
 }
 
@@ -55,7 +62,8 @@ TEST(Config, YamlErrorsNameFileAndLine) {
 
   std::ofstream(path) << "map: [unclosed\n";
   EXPECT_NE(messageOf([&] { c.loadYaml(path); }).find("invalid YAML"), std::string::npos);
-  EXPECT_NE(messageOf([&] { c.loadYaml(dir + "/missing.yaml"); }).find("cannot open"), std::string::npos);
+  EXPECT_NE(messageOf([&] { c.loadYaml(dir + "/missing.yaml"); }).find("cannot open"),
+            std::string::npos);
 }
 
 TEST(Config, PresetsLoadAndEffectiveConfigRoundTrips) {
@@ -79,7 +87,8 @@ TEST(Config, PresetsLoadAndEffectiveConfigRoundTrips) {
     EXPECT_EQ(reloaded_keys[i].get(), original_keys[i].get()) << original_keys[i].name;
   EXPECT_DOUBLE_EQ(reloaded.voxel_size, 0.004);
   EXPECT_DOUBLE_EQ(reloaded.camera.cy, 255.3);
-  EXPECT_NE(messageOf([] { Config().loadPreset("tum_fr9"); }).find("unknown preset"), std::string::npos);
+  EXPECT_NE(messageOf([] { Config().loadPreset("tum_fr9"); }).find("unknown preset"),
+            std::string::npos);
 }
 
 }  // namespace

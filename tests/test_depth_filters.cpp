@@ -2,9 +2,9 @@
 
 #include <random>
 
-#include "rgbdmap/back_projector.hpp"
-#include "rgbdmap/depth_filter.hpp"
-#include "rgbdmap/depth_smoother.hpp"
+#include "rgbdmap/mapping/back_projector.hpp"
+#include "rgbdmap/mapping/depth_filter.hpp"
+#include "rgbdmap/mapping/depth_smoother.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -7,10 +7,10 @@
 #include <fstream>
 #include <random>
 
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/map_evaluation.hpp"
-#include "rgbdmap/synthetic_scene.hpp"
-#include "rgbdmap/trajectory_evaluation.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/sim/synthetic_scene.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -2,7 +2,7 @@
 
 #include <thread>
 
-#include "rgbdmap/frame_queue.hpp"
+#include "rgbdmap/runtime/frame_queue.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "rgbdmap/depth_filter.hpp"
-#include "rgbdmap/depth_smoother.hpp"
+#include "rgbdmap/mapping/depth_filter.hpp"
+#include "rgbdmap/mapping/depth_smoother.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -6,9 +6,9 @@
 
 #include <iostream>
 
-#include "rgbdmap/map_evaluation.hpp"
-#include "rgbdmap/trajectory.hpp"
-#include "rgbdmap/trajectory_evaluation.hpp"
+#include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

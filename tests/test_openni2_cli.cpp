@@ -17,11 +17,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/openni2_source.hpp"
-#include "rgbdmap/source_factory.hpp"
-#include "rgbdmap/tum_sequence.hpp"
-#include "rgbdmap/usb_cameras.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/drivers/openni2_source.hpp"
+#include "rgbdmap/drivers/usb_cameras.hpp"
+#include "rgbdmap/runtime/source_factory.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

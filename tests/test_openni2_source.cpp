@@ -15,9 +15,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/openni2_source.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/drivers/openni2_source.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

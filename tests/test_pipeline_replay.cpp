@@ -6,11 +6,11 @@
 #include <fstream>
 #include <set>
 
-#include "rgbdmap/back_projector.hpp"
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/trajectory.hpp"
-#include "rgbdmap/tum_sequence.hpp"
-#include "rgbdmap/voxel_map.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/mapping/back_projector.hpp"
+#include "rgbdmap/mapping/voxel_map.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -26,9 +26,10 @@ struct Replay {
 
 Replay replay(const std::string& sequence, const std::string& dir, const std::string& extra = "") {
   Replay r;
-  r.exit_code = test::run(test::binary() + " --source tum:" + test::tumDir(sequence) + " --out " +
-                              dir + "/map.pcd --rate max -q --stats " + dir + "/stats.json " + extra,
-                          &r.output);
+  r.exit_code =
+      test::run(test::binary() + " --source tum:" + test::tumDir(sequence) + " --out " + dir +
+                    "/map.pcd --rate max -q --stats " + dir + "/stats.json " + extra,
+                &r.output);
   r.map = test::loadMap(dir + "/map.pcd");
   r.keyframes = Trajectory::load(dir + "/map_keyframes.txt");
   r.stats = test::readFile(dir + "/stats.json");
@@ -103,7 +104,8 @@ TEST(PipelineReplay, Fr1XyzEndToEnd) {
   EXPECT_EQ(statValue(r.stats, "map_points"), static_cast<long>(r.map.size()));
   EXPECT_GT(r.map.size(), 30000u);
   expectDistinctVoxels(r.map, 0.01);
-  const double agreement = agreementWithOtherFrames("rgbd_dataset_freiburg1_xyz", r.map, r.keyframes, 0.02);
+  const double agreement =
+      agreementWithOtherFrames("rgbd_dataset_freiburg1_xyz", r.map, r.keyframes, 0.02);
   std::cout << "fr1/xyz: non-keyframe pixels within 2 cm of the map: " << agreement << "\n";
   EXPECT_GT(agreement, 0.85);
   // The side outputs exist: the effective configuration and a picture.

@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
 
 namespace rgbdmap::test {
 

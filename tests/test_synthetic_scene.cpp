@@ -9,10 +9,10 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/synthetic_scene.hpp"
-#include "rgbdmap/synthetic_sequence.hpp"
-#include "rgbdmap/tum_sequence.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/sim/synthetic_scene.hpp"
+#include "rgbdmap/sim/synthetic_sequence.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -3,8 +3,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "rgbdmap/association.hpp"
-#include "rgbdmap/tum_sequence.hpp"
+#include "rgbdmap/capture/association.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -66,7 +66,8 @@ TEST(TumSequence, InterpolatesGroundTruthAtColourStamp) {
   // Stamps near 1.3e9 s carry ~1e-7 s of rounding: 1e-6 m is far below any real error.
   EXPECT_LT((seq[0].pose->translation() - expected).norm(), 1e-6);
   // Rotation: between the two samples' quaternions (slerp), so close to both.
-  const Eigen::Quaterniond qa(-0.3266, 0.6583, 0.6112, -0.2938), qb(-0.3248, 0.6574, 0.6126, -0.2949);
+  const Eigen::Quaterniond qa(-0.3266, 0.6583, 0.6112, -0.2938),
+      qb(-0.3248, 0.6574, 0.6126, -0.2949);
   const Eigen::Quaterniond q(seq[0].pose->linear());
   EXPECT_LT(q.angularDistance(qb.normalized()), q.angularDistance(qa.normalized()) + 1e-12);
   EXPECT_LT(q.angularDistance(qb.normalized()), 1e-3);
@@ -110,7 +111,8 @@ TEST(TumSequence, LoadsDepthInMetresAndColour) {
 
 TEST(TumSequence, PresetFromFolderName) {
   EXPECT_EQ(TumSequence::presetForFolder("/data/rgbd_dataset_freiburg1_xyz/"), "tum_fr1");
-  EXPECT_EQ(TumSequence::presetForFolder("rgbd_dataset_freiburg3_long_office_household"), "tum_fr3");
+  EXPECT_EQ(TumSequence::presetForFolder("rgbd_dataset_freiburg3_long_office_household"),
+            "tum_fr3");
   EXPECT_EQ(TumSequence::presetForFolder("/tmp/freiburg2/synthetic_room"), "");
 }
 

@@ -3,8 +3,8 @@
 #include <random>
 #include <set>
 
-#include "rgbdmap/checkpoint_writer.hpp"
-#include "rgbdmap/voxel_map.hpp"
+#include "rgbdmap/mapping/voxel_map.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
 
 namespace rgbdmap {
 namespace {

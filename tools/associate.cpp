@@ -1,8 +1,8 @@
 #include <cstdio>
 
-#include "rgbdmap/association.hpp"
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/text_lines.hpp"
+#include "rgbdmap/base/text_lines.hpp"
+#include "rgbdmap/capture/association.hpp"
+#include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -36,12 +36,14 @@ void addAssociateCommand(CLI::App& app, Command& selected) {
   cmd->add_option("first", o->first, "first list (e.g. rgb.txt)")->required();
   cmd->add_option("second", o->second, "second list (e.g. depth.txt)")->required();
   cmd->add_option("--max-difference", o->max_difference, "seconds")->capture_default_str();
-  cmd->add_option("--offset", o->offset, "seconds added to the second list's stamps")->capture_default_str();
+  cmd->add_option("--offset", o->offset, "seconds added to the second list's stamps")
+      ->capture_default_str();
   cmd->callback([o, &selected] {
     selected = [o] {
       const Rows a = readRows(o->first), b = readRows(o->second);
       for (const auto& [i, j] : associate(a.stamps, b.stamps, o->max_difference, o->offset))
-        std::printf("%.6f%s %.6f%s\n", a.stamps[i], a.rest[i].c_str(), b.stamps[j], b.rest[j].c_str());
+        std::printf("%.6f%s %.6f%s\n", a.stamps[i], a.rest[i].c_str(), b.stamps[j],
+                    b.rest[j].c_str());
       return 0;
     };
   });

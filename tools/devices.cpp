@@ -2,10 +2,10 @@
 // what OpenNI2 can open; says what to do when a camera is there but cannot be used.
 #include <cstdio>
 
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/openni2_source.hpp"
-#include "rgbdmap/usb_cameras.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/drivers/openni2_source.hpp"
+#include "rgbdmap/drivers/usb_cameras.hpp"
+#include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -15,12 +15,13 @@ int listDevices() {
   if (!scan.bus_readable) {
     std::printf("USB: the bus could not be read (%s): no camera found\n", scan.bus_error.c_str());
   } else if (scan.cameras.empty()) {
-    std::printf("USB: no camera found among %zu USB devices (looked for Microsoft Kinect v1 "
-                "045e:02ae, PrimeSense/ASUS Xtion 1d27:06xx, Orbbec 2bc5:*)%s\n",
-                scan.devices_seen,
-                scan.devices_seen == 0 ? "; no USB device is visible at all (in a container, "
-                                         "pass /dev/bus/usb in)"
-                                       : "");
+    std::printf(
+        "USB: no camera found among %zu USB devices (looked for Microsoft Kinect v1 "
+        "045e:02ae, PrimeSense/ASUS Xtion 1d27:06xx, Orbbec 2bc5:*)%s\n",
+        scan.devices_seen,
+        scan.devices_seen == 0 ? "; no USB device is visible at all (in a container, "
+                                 "pass /dev/bus/usb in)"
+                               : "");
   } else {
     std::printf("USB: %zu RGB-D camera device(s) among %zu USB devices:\n", scan.cameras.size(),
                 scan.devices_seen);
@@ -30,15 +31,18 @@ int listDevices() {
       if (!camera.advice.empty()) std::printf("    to do: %s\n", camera.advice.c_str());
     }
     if (!scan.anyCamera())
-      std::printf("  no camera part: a Kinect v1 shows its camera (045e:02ae) only with its own "
-                  "power supply plugged in\n");
+      std::printf(
+          "  no camera part: a Kinect v1 shows its camera (045e:02ae) only with its own "
+          "power supply plugged in\n");
   }
 
   std::printf("OpenNI2 (drivers in %s): ", openni2DriverDirectory().c_str());
   try {
     const std::vector<std::string> devices = listOpenNI2Devices();
-    if (devices.empty()) std::printf("no device it can open\n");
-    else std::printf("%zu device(s) it can open:\n", devices.size());
+    if (devices.empty())
+      std::printf("no device it can open\n");
+    else
+      std::printf("%zu device(s) it can open:\n", devices.size());
     for (const std::string& device : devices) std::printf("  openni2:%s\n", device.c_str());
   } catch (const InputError& e) {
     std::printf("%s\n", e.what());

@@ -5,10 +5,10 @@
 #include <memory>
 #include <string>
 
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/map_evaluation.hpp"
-#include "rgbdmap/trajectory_evaluation.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -13,10 +13,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/config.hpp"
-#include "rgbdmap/error.hpp"
-#include "rgbdmap/source_factory.hpp"
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/source_factory.hpp"
+#include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -148,7 +148,8 @@ int record(const RecordOptions& o) {
   const fs::path out(o.out);
   std::error_code ec;
   if (fs::exists(out / "rgb.txt", ec) || fs::exists(out / "depth.txt", ec))
-    throw InputError(o.out + ": already holds a recording (rgb.txt/depth.txt); choose another --out");
+    throw InputError(o.out +
+                     ": already holds a recording (rgb.txt/depth.txt); choose another --out");
   fs::create_directories(out / "rgb", ec);
   if (!ec) fs::create_directories(out / "depth", ec);
   if (ec) throw InputError(o.out + ": cannot create the folder (" + ec.message() + ")");
@@ -169,11 +170,11 @@ int record(const RecordOptions& o) {
     if (status == ReadStatus::kEnd) break;
     if (status == ReadStatus::kSkipped) continue;
     if (status == ReadStatus::kTimeout) {
-      if (!source->canReconnect())
-        throw InputError(origin + ": camera stopped delivering frames");
-      spdlog::warn("{}: camera stopped delivering frames; waiting for it (Ctrl-C stops, keeping "
-                   "the {} frames saved)",
-                   origin, written);
+      if (!source->canReconnect()) throw InputError(origin + ": camera stopped delivering frames");
+      spdlog::warn(
+          "{}: camera stopped delivering frames; waiting for it (Ctrl-C stops, keeping "
+          "the {} frames saved)",
+          origin, written);
       while (!signals.stopRequested() && !source->reconnect()) {
       }
       continue;
@@ -206,13 +207,15 @@ int record(const RecordOptions& o) {
               static_cast<unsigned long long>(source->skipped()),
               static_cast<unsigned long long>(out_of_order));
   // A TUM folder holds no intrinsics: say which ones the frames were taken with.
-  std::printf("replay: rgbdmap --source tum:%s --set camera.fx=%g --set camera.fy=%g "
-              "--set camera.cx=%g --set camera.cy=%g",
-              fs::absolute(out).string().c_str(), camera.fx, camera.fy, camera.cx, camera.cy);
+  std::printf(
+      "replay: rgbdmap --source tum:%s --set camera.fx=%g --set camera.fy=%g "
+      "--set camera.cx=%g --set camera.cy=%g",
+      fs::absolute(out).string().c_str(), camera.fx, camera.fy, camera.cx, camera.cy);
   if (camera.hasDistortion())
-    std::printf(" --set camera.k1=%g --set camera.k2=%g --set camera.p1=%g --set camera.p2=%g "
-                "--set camera.k3=%g",
-                camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+    std::printf(
+        " --set camera.k1=%g --set camera.k2=%g --set camera.p1=%g --set camera.p2=%g "
+        "--set camera.k3=%g",
+        camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
   std::printf("\n");
   return 0;
 }

@@ -6,9 +6,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/map_evaluation.hpp"
-#include "rgbdmap/map_renderer.hpp"
+#include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/tools/commands.hpp"
+#include "rgbdmap/tools/map_renderer.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -4,9 +4,9 @@
 #include <memory>
 #include <string>
 
-#include "rgbdmap/commands.hpp"
-#include "rgbdmap/synthetic_scene.hpp"
-#include "rgbdmap/synthetic_sequence.hpp"
+#include "rgbdmap/sim/synthetic_scene.hpp"
+#include "rgbdmap/sim/synthetic_sequence.hpp"
+#include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "rgbdmap/tum_sequence.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
 
 namespace rgbdmap::openni2_tum {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "rgbdmap/frame.hpp"
+#include "rgbdmap/base/frame.hpp"
 
 namespace rgbdmap::openni2_tum {
 

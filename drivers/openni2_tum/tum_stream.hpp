@@ -6,7 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "rgbdmap/frame.hpp"
+#include "rgbdmap/base/frame.hpp"
 #include "virtual_camera.hpp"
 
 namespace rgbdmap::openni2_tum {

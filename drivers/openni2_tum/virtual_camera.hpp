@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "rgbdmap/frame.hpp"
-#include "rgbdmap/tum_sequence.hpp"
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
 #include "tum_device_uri.hpp"
 
 namespace rgbdmap::openni2_tum {

@@ -1,0 +1,42 @@
+# Fails when a file includes a header of a subsystem its own subsystem may not depend on, so that
+# dependencies keep pointing one way:
+#   tools, runtime/main -> runtime -> mapping -> tracking -> capture -> base
+#                          runtime -> drivers -> capture;   eval -> sim -> base;   eval -> capture
+# Run as a build step: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
+cmake_policy(SET CMP0057 NEW)
+set(allowed_base base)
+set(allowed_capture base capture)
+set(allowed_tracking base capture tracking)
+set(allowed_mapping base capture tracking mapping)
+set(allowed_sim base sim)
+set(allowed_eval base capture sim eval)
+set(allowed_drivers base capture drivers)
+set(allowed_runtime base capture tracking mapping drivers runtime)
+set(allowed_tools base capture tracking mapping drivers runtime sim eval tools)
+
+set(violations "")
+foreach(layer base capture tracking mapping sim eval drivers runtime tools)
+  file(GLOB_RECURSE files
+    ${SOURCE_DIR}/src/${layer}/*.cpp ${SOURCE_DIR}/src/${layer}/*.hpp
+    ${SOURCE_DIR}/include/rgbdmap/${layer}/*.hpp)
+  if(layer STREQUAL "drivers")
+    file(GLOB_RECURSE more ${SOURCE_DIR}/drivers/*.cpp ${SOURCE_DIR}/drivers/*.hpp)
+    list(APPEND files ${more})
+  elseif(layer STREQUAL "tools")
+    file(GLOB more ${SOURCE_DIR}/tools/*.cpp ${SOURCE_DIR}/tools/*.hpp)
+    list(APPEND files ${more})
+  endif()
+  foreach(file ${files})
+    file(STRINGS ${file} includes REGEX "^#include \"rgbdmap/[a-z_]+/")
+    foreach(line ${includes})
+      string(REGEX REPLACE "^#include \"rgbdmap/([a-z_]+)/.*" "\\1" target "${line}")
+      if(NOT target IN_LIST allowed_${layer})
+        file(RELATIVE_PATH rel ${SOURCE_DIR} ${file})
+        string(APPEND violations "  ${rel} (${layer}) includes ${target}: ${line}\n")
+      endif()
+    endforeach()
+  endforeach()
+endforeach()
+if(violations)
+  message(FATAL_ERROR "Includes against the layering (see cmake/check_layers.cmake):\n${violations}")
+endif()

@@ -1,0 +1,25 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/capture/frame_source.hpp"
+
+namespace rgbdmap {
+
+// A camera through OpenNI2: "" opens the first device, a path ending in ".oni" plays that
+// recording (losslessly, at replay.rate timing unless it is 0), anything else is a device URI
+// (including URIs of driver plugins, such as "tum:/path/to/folder").
+// Depth comes as metres (from DEPTH_100_UM or DEPTH_1_MM), colour as BGR, both registered and
+// synchronised where the device supports it; stamps are the device clock in seconds.
+// Throws InputError naming the file or device when it cannot be opened; with no camera attached
+// the message says what is on the USB bus and why it could not be used.
+std::unique_ptr<FrameSource> openOpenNI2Source(const std::string& uri_or_file,
+                                               const Config& config);
+
+// The devices OpenNI2 can open right now, one "URI (vendor name, USB vvvv:pppp)" each.
+std::vector<std::string> listOpenNI2Devices();
+
+}  // namespace rgbdmap

@@ -1,0 +1,58 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "rgbdmap/mapping/map_cloud.hpp"
+
+namespace rgbdmap {
+
+// Writes a cloud as binary PCD so that the destination only ever holds a complete file:
+// write "<path>.tmp-<pid>", fsync it, rename over the destination, fsync the folder.
+// Returns false with `error` set when anything fails (the temp file is removed).
+bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error);
+
+// A background thread that writes map snapshots while mapping goes on. Only the newest pending
+// snapshot is kept: if mapping produces snapshots faster than the disk takes them, older
+// unwritten ones are superseded (each is a complete map).
+class CheckpointWriter {
+ public:
+  struct Result {
+    bool ok = false;
+    std::string path;
+    std::string error;
+    std::size_t points = 0;
+    double seconds = 0.0;
+  };
+  using Callback = std::function<void(const Result&)>;
+
+  explicit CheckpointWriter(Callback on_done = nullptr);
+  ~CheckpointWriter();  // finishes a pending write, then stops
+
+  void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path);
+  // Waits until nothing is pending or being written. Returns the last result.
+  Result flush();
+  std::uint64_t written() const { return written_.load(); }
+  std::uint64_t failed() const { return failed_.load(); }
+
+ private:
+  void run();
+
+  Callback on_done_;
+  std::mutex mutex_;
+  std::condition_variable wake_, idle_;
+  std::shared_ptr<const MapCloud> pending_;
+  std::string pending_path_;
+  bool busy_ = false;
+  bool stop_ = false;
+  Result last_;
+  std::atomic<std::uint64_t> written_{0}, failed_{0};
+  std::thread thread_;
+};
+
+}  // namespace rgbdmap

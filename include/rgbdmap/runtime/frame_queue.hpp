@@ -1,0 +1,67 @@
+#pragma once
+
+#include <atomic>
+#include <boost/lockfree/spsc_queue.hpp>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "rgbdmap/base/frame.hpp"
+
+namespace rgbdmap {
+
+// What the capture side does when the mapper has not taken the queued frames yet.
+enum class QueuePolicy {
+  kDropOldest,  // live camera: never block the sensor, discard the stalest queued frame
+  kBlock,       // replay: wait, lose nothing
+};
+
+// A bounded frame queue between one capture thread and one mapping thread, with the frames
+// drawn from a pool allocated up front, so steady state allocates nothing. Both directions are
+// Boost.Lockfree spsc_queues (filled frames to the mapper, emptied frames back).
+//
+// kDropOldest keeps the camera from ever waiting: the filled queue can physically hold every
+// frame of the pool, and the consumer, when it pops, discards all but the newest `capacity`
+// queued frames (the oldest ones) and counts them. Only if the mapper stalls so long that the
+// whole pool is queued does the producer capture into a private overflow frame, which is then
+// dropped (counted) instead of queued.
+class FrameQueue {
+ public:
+  FrameQueue(std::size_t capacity, QueuePolicy policy, int width, int height);
+
+  // Producer side. acquire() hands out an empty frame to fill; never blocks in kDropOldest.
+  // Returns nullptr only after close().
+  Frame* acquire();
+  // Queues a frame from acquire(). Never blocks.
+  void push(Frame* frame);
+  // No more frames will come; the consumer drains what is queued, then pop() finishes.
+  void close();
+
+  // Consumer side. Waits up to `timeout` for the next frame; nullptr on timeout or, with
+  // `finished` set, when the queue is closed and drained.
+  Frame* pop(std::chrono::milliseconds timeout, bool& finished);
+  // Returns a frame taken with pop() to the pool.
+  void release(Frame* frame);
+
+  std::size_t capacity() const { return capacity_; }
+  std::size_t depth() const {
+    const std::int64_t n = queued_.load(std::memory_order_relaxed);
+    return n > 0 ? static_cast<std::size_t>(n) : 0;  // briefly -1 while a push is in flight
+  }
+  std::uint64_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
+
+ private:
+  std::size_t capacity_;
+  QueuePolicy policy_;
+  std::vector<std::unique_ptr<Frame>> storage_;
+  boost::lockfree::spsc_queue<Frame*> filled_;
+  boost::lockfree::spsc_queue<Frame*> free_;
+  Frame* overflow_ = nullptr;  // kDropOldest: captured into when the pool is exhausted
+  std::atomic<std::int64_t> queued_{0};
+  std::atomic<std::uint64_t> dropped_{0};
+  std::atomic<bool> closed_{false};
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,45 @@
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/capture/frame_source.hpp"
+
+namespace rgbdmap {
+
+// Requests from outside the pipeline (signal thread, tests). Only atomics: safe from anywhere.
+struct RunControl {
+  std::atomic<bool> stop{false};      // SIGINT/SIGTERM: stop capture, drain, final save
+  std::atomic<bool> snapshot{false};  // SIGUSR1: write a checkpoint now
+};
+
+struct PipelineOutputs {
+  std::string map_path = "map.pcd";
+  std::string trajectory_path;  // keyframe poses, TUM format ("" = none)
+  std::string config_path;      // effective configuration ("" = none)
+  bool status_line = true;
+};
+
+// The running system: a capture thread reads the source into a bounded queue, a mapping thread
+// turns frames into the map and triggers checkpoints, a writer thread writes them. run() returns
+// after the source ends or a stop is requested, with the final map written.
+class Pipeline {
+ public:
+  Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs);
+
+  // Returns the process exit code: 0 on success, 1 when the run stopped on bad input or a failed
+  // final write (the map built so far is still saved).
+  int run(RunControl& control);
+  const RunStats& stats() const { return stats_; }
+
+ private:
+  Config config_;
+  std::unique_ptr<FrameSource> source_;
+  PipelineOutputs outputs_;
+  RunStats stats_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,90 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/sim/synthetic_scene.hpp"
+
+namespace rgbdmap {
+
+// Kinect-v1-like axial depth noise (Khoshelham and Elberink 2012, as used by the ICL-NUIM
+// and TUM simulations): sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres.
+double kinectDepthSigma(double z);
+
+// A smooth hand-held-like camera path through a room: the camera circles the room's centre at
+// about half its height, looking outwards with sinusoidal sway in yaw, pitch and roll, so each
+// surface is seen from several positions. Sums of sinusoids; the seed only shifts the phases of
+// the small perturbations, so every seed keeps well clear of the scene's surfaces.
+class HandheldPath {
+ public:
+  HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds);
+  // Camera-to-world pose (x right, y down, z forward) at t seconds after the start.
+  Eigen::Isometry3d pose(double t) const;
+
+ private:
+  Eigen::Vector3d center_;
+  Eigen::Vector2d radius_;
+  double loop_seconds_;
+  double phase_[8];
+};
+
+struct SyntheticSequenceOptions {
+  int frames = 300;
+  double fps = 30.0;
+  std::uint64_t seed = 1;
+  bool noise = true;  // depth noise, dropouts and colour noise; false: exact depth (quantised)
+  double loop_seconds = 12.0;        // one circle of the room
+  double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
+  // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
+  // always inside the 0.02 s association window). Both images are rendered at the colour
+  // stamp's pose, so the map error measures the mapper, not a time skew between the images.
+  double depth_offset = 0.004;
+  double depth_offset_jitter = 0.004;
+  double groundtruth_rate = 100.0;  // Hz, as TUM's motion capture
+  CameraIntrinsics camera;          // default: 640x480, fx = fy = 525, cx = 319.5, cy = 239.5
+  double depth_scale = 5000.0;      // units per metre in the 16-bit PNGs
+  double min_range = 0.5;           // m: no depth nearer or farther (0 in the image)
+  double max_range = 4.5;
+  double dropout = 0.02;            // share of pixels missing at random (with noise)
+  double max_incidence_deg = 78.0;  // steeper views of a surface give no depth (with noise)
+  double color_noise = 2.0;         // grey levels, Gaussian (with noise)
+  double surface_voxel = 0.005;     // m: spacing of visible_surface.pcd
+  int png_compression = 1;          // zlib level: fast to write, fast to read
+  double camera_margin = 0.25;      // m: the path must stay this far from every surface
+};
+
+struct SyntheticSequenceSummary {
+  int frames = 0;
+  std::size_t surface_points = 0;  // in visible_surface.pcd
+  double valid_depth_share = 0.0;  // pixels with a depth measurement
+  double seconds = 0.0;            // wall time of the generation
+};
+
+// Renders a camera's view of the scene: z-depth in metres (0 = no hit) without noise, the lit
+// colour (BGR) and the cosine of the incidence angle, for all pixels. Rays are precomputed for
+// the intrinsics (no distortion).
+class SyntheticRenderer {
+ public:
+  SyntheticRenderer(const SyntheticScene& scene, const CameraIntrinsics& camera);
+  // depth: CV_32FC1, color: CV_8UC3, incidence_cos: CV_32FC1, hits: CV_32FC3 world points.
+  void render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv::Mat& color, cv::Mat& incidence_cos,
+              cv::Mat& hits) const;
+
+ private:
+  const SyntheticScene& scene_;
+  CameraIntrinsics camera_;
+  std::vector<Eigen::Vector3d> rays_;  // per pixel, camera frame, z = 1
+  Eigen::Vector3d light_;              // a lamp under the ceiling, for view-independent shading
+};
+
+// Writes a TUM-layout sequence folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt,
+// scene.yaml, visible_surface.pcd) of `scene` seen along HandheldPath. Deterministic for a
+// seed. Throws InputError if the folder cannot be written or the path would leave free space.
+SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
+                                                const SyntheticScene& scene,
+                                                const SyntheticSequenceOptions& options);
+
+}  // namespace rgbdmap

@@ -1,0 +1,245 @@
+#include "rgbdmap/base/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "rgbdmap/base/error.hpp"
+
+namespace rgbdmap {
+namespace {
+
+std::string formatNumber(double v) {
+  std::ostringstream out;
+  out.precision(10);
+  out << v;
+  return out.str();
+}
+
+Config::Key number(const std::string& name, double* field, double lo, double hi,
+                   const std::string& help) {
+  return {name, help,
+          [=](const std::string& text) {
+            std::size_t used = 0;
+            double v = 0;
+            try {
+              v = std::stod(text, &used);
+            } catch (const std::exception&) {
+              used = 0;
+            }
+            if (used == 0 || used != text.size() || !std::isfinite(v))
+              throw std::invalid_argument("'" + text + "' is not a number");
+            if (v < lo || v > hi)
+              throw std::invalid_argument(text + " is outside [" + formatNumber(lo) + ", " +
+                                          formatNumber(hi) + "]");
+            *field = v;
+          },
+          [=] { return formatNumber(*field); }};
+}
+
+Config::Key integer(const std::string& name, int* field, int lo, int hi, const std::string& help) {
+  return {name, help,
+          [=](const std::string& text) {
+            std::size_t used = 0;
+            long v = 0;
+            try {
+              v = std::stol(text, &used);
+            } catch (const std::exception&) {
+              used = 0;
+            }
+            if (used == 0 || used != text.size())
+              throw std::invalid_argument("'" + text + "' is not an integer");
+            if (v < lo || v > hi)
+              throw std::invalid_argument(text + " is outside [" + std::to_string(lo) + ", " +
+                                          std::to_string(hi) + "]");
+            *field = static_cast<int>(v);
+          },
+          [=] { return std::to_string(*field); }};
+}
+
+Config::Key boolean(const std::string& name, bool* field, const std::string& help) {
+  return {name, help,
+          [=](const std::string& text) {
+            if (text == "true" || text == "1" || text == "yes" || text == "on")
+              *field = true;
+            else if (text == "false" || text == "0" || text == "no" || text == "off")
+              *field = false;
+            else
+              throw std::invalid_argument("'" + text + "' is not true or false");
+          },
+          [=] { return std::string(*field ? "true" : "false"); }};
+}
+
+Config::Key choice(const std::string& name, std::string* field, std::vector<std::string> options,
+                   const std::string& help) {
+  return {name, help,
+          [=](const std::string& text) {
+            for (const std::string& o : options)
+              if (o == text) {
+                *field = text;
+                return;
+              }
+            std::string list;
+            for (const std::string& o : options) list += (list.empty() ? "" : ", ") + o;
+            throw std::invalid_argument("'" + text + "' is not one of " + list);
+          },
+          [=] { return *field; }};
+}
+
+Config::Key text(const std::string& name, std::string* field, const std::string& help) {
+  return {name, help, [=](const std::string& value) { *field = value; }, [=] { return *field; }};
+}
+
+// Flattens nested YAML maps into "a.b" keys with scalar values.
+void flatten(const YAML::Node& node, const std::string& prefix,
+             std::vector<std::pair<std::string, YAML::Node>>& out) {
+  if (node.IsMap()) {
+    for (const auto& item : node)
+      flatten(item.second,
+              prefix.empty() ? item.first.as<std::string>()
+                             : prefix + "." + item.first.as<std::string>(),
+              out);
+  } else {
+    out.emplace_back(prefix, node);
+  }
+}
+
+}  // namespace
+
+std::vector<Config::Key> Config::keys() {
+  constexpr double kBig = 1e6;
+  return {
+      integer("camera.width", &camera.width, 16, 8192, "image width in pixels"),
+      integer("camera.height", &camera.height, 16, 8192, "image height in pixels"),
+      number("camera.fx", &camera.fx, 1, kBig, "focal length x (px)"),
+      number("camera.fy", &camera.fy, 1, kBig, "focal length y (px)"),
+      number("camera.cx", &camera.cx, -kBig, kBig, "principal point x (px)"),
+      number("camera.cy", &camera.cy, -kBig, kBig, "principal point y (px)"),
+      number("camera.k1", &camera.k1, -100, 100, "radial distortion k1"),
+      number("camera.k2", &camera.k2, -100, 100, "radial distortion k2"),
+      number("camera.p1", &camera.p1, -100, 100, "tangential distortion p1"),
+      number("camera.p2", &camera.p2, -100, 100, "tangential distortion p2"),
+      number("camera.k3", &camera.k3, -100, 100, "radial distortion k3"),
+      number("camera.depth_scale", &depth_scale, 1e-3, kBig,
+             "depth units per metre (TUM PNG 5000, OpenNI2 1000)"),
+      // OpenNI2 sources: where the intrinsics come from.
+      choice("camera.intrinsics", &camera_intrinsics, {"preset", "device"},
+             "preset: camera.fx/fy/cx/cy; device: from the OpenNI2 device's field of view"),
+      number(
+          "replay.rate", &rate, 0, 1000,
+          "replay speed: 1 = as recorded (late frames dropped), 0 = as fast as possible, lossless"),
+      integer("queue.capacity", &queue_capacity, 1, 1024,
+              "frames queued between capture and mapping"),
+      choice("pose.source", &pose_source, {"auto", "groundtruth", "odometry", "trajectory"},
+             "where camera poses come from (auto: ground truth when the source has it, else "
+             "odometry)"),
+      text("pose.trajectory", &pose_trajectory, "TUM trajectory file when pose.source=trajectory"),
+      number("pose.max_gap", &pose_max_gap, 0, 10,
+             "a frame farther than this (s) from any pose sample gets no pose and is not mapped"),
+      choice("keyframe.policy", &keyframe_policy, {"interval", "motion", "both"},
+             "interval: every N frames; motion: after moving; both: whichever comes first"),
+      integer("keyframe.every_n", &keyframe_every_n, 1, 1000000, "frames between keyframes"),
+      number("keyframe.min_translation", &keyframe_min_translation, 0, 100,
+             "metres moved since the last keyframe that make a new one"),
+      number("keyframe.min_rotation", &keyframe_min_rotation, 0, 3.15,
+             "radians turned since the last keyframe that make a new one"),
+      number("filter.min_depth", &min_depth, 0, 100, "nearest depth used (m)"),
+      number("filter.max_depth", &max_depth, 0.01, 100, "farthest depth used (m)"),
+      boolean("filter.undistort", &undistort, "undo lens distortion when the camera has it"),
+      choice("filter.outliers", &outlier_filter, {"fast", "statistical", "none"},
+             "fast: flying pixels and specks on the depth image; statistical: PCL's SOR"),
+      number("filter.edge_jump", &edge_jump, 0.001, 1,
+             "relative depth jump to a neighbour that marks a flying pixel"),
+      integer("filter.speck_min_neighbours", &speck_min_neighbours, 0, 8,
+              "neighbours (of 8) with similar depth a pixel needs to be kept"),
+      boolean("filter.subsample", &subsample,
+              "fuse every 2nd pixel of each row and column where 2 pixels span under half a voxel"),
+      integer("filter.smooth_radius", &smooth_radius, 0, 10,
+              "half-size of the edge-aware inverse-depth averaging window (0 = off)"),
+      integer("filter.sor_mean_k", &sor_mean_k, 1, 1000, "statistical outlier removal: neighbours"),
+      number("filter.sor_stddev", &sor_stddev, 0, 100, "statistical outlier removal: sigma"),
+      number("map.voxel_size", &voxel_size, 0.001, 10, "voxel edge (m)"),
+      integer("map.min_observations", &map_min_observations, 1, 1000000,
+              "voxels observed fewer times are left out of written maps"),
+      integer("checkpoint.every_keyframes", &checkpoint_every_keyframes, 0, 100000000,
+              "write a checkpoint every this many keyframes (0 = off)"),
+      number("checkpoint.every_seconds", &checkpoint_every_seconds, 0, 1e9,
+             "write a checkpoint every this many seconds (0 = off)"),
+  };
+}
+
+void Config::set(const std::string& key, const std::string& value, const std::string& origin) {
+  for (Key& k : keys()) {
+    if (k.name != key) continue;
+    try {
+      k.set(value);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(origin + ": " + key + ": " + e.what());
+    }
+    if (min_depth >= max_depth)
+      throw InputError(origin + ": " + key + ": filter.min_depth must be below filter.max_depth");
+    return;
+  }
+  throw InputError(origin + ": unknown config key '" + key + "' (see `rgbdmap --list-keys`)");
+}
+
+void Config::loadYaml(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path + ": cannot open config file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg);
+  }
+  if (root.IsNull()) return;
+  if (!root.IsMap()) throw InputError(path + ": expected a map of config sections");
+  std::vector<std::pair<std::string, YAML::Node>> items;
+  flatten(root, "", items);
+  for (const auto& [key, node] : items) {
+    const std::string origin = path + ":" + std::to_string(node.Mark().line + 1);
+    if (key == "preset") {
+      preset = node.as<std::string>();
+      continue;
+    }
+    if (!node.IsScalar()) throw InputError(origin + ": " + key + ": expected a single value");
+    set(key, node.as<std::string>(), origin);
+  }
+}
+
+std::string Config::presetDirectory() { return RGBDMAP_CONFIG_DIR; }
+
+void Config::loadPreset(const std::string& name_or_path) {
+  const bool is_path = name_or_path.find('/') != std::string::npos ||
+                       name_or_path.find(".yaml") != std::string::npos;
+  const std::string path =
+      is_path ? name_or_path : presetDirectory() + "/" + name_or_path + ".yaml";
+  if (!is_path && !std::ifstream(path))
+    throw InputError("unknown preset '" + name_or_path + "' (no " + path + ")");
+  preset = name_or_path;
+  loadYaml(path);
+}
+
+std::string Config::toYaml() {
+  std::ostringstream out;
+  out << "# rgbdmap effective configuration";
+  if (!preset.empty()) out << " (preset " << preset << ")";
+  out << "\n";
+  std::string section;
+  for (const Key& k : keys()) {
+    const std::string s = k.name.substr(0, k.name.find('.'));
+    if (s != section) {
+      section = s;
+      out << section << ":\n";
+    }
+    std::string value = k.get();
+    if (value.empty()) value = "\"\"";
+    out << "  " << k.name.substr(k.name.find('.') + 1) << ": " << value << "  # " << k.help << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace rgbdmap

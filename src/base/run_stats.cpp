@@ -1,0 +1,83 @@
+#include "rgbdmap/base/run_stats.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace rgbdmap {
+namespace {
+
+constexpr double kMinSeconds = 1e-6;
+constexpr double kBinsPerDecade = 100.0;
+
+}  // namespace
+
+void LatencyHistogram::record(double seconds) {
+  const double clamped = std::max(seconds, kMinSeconds);
+  int bin = static_cast<int>(std::log10(clamped / kMinSeconds) * kBinsPerDecade);
+  bin = std::min(std::max(bin, 0), kBins - 1);
+  ++bins_[bin];
+  ++count_;
+  sum_ += seconds;
+  max_ = std::max(max_, seconds);
+}
+
+double LatencyHistogram::percentile(double q) const {
+  if (count_ == 0) return 0.0;
+  const auto target = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count_)));
+  std::uint64_t seen = 0;
+  for (int bin = 0; bin < kBins; ++bin) {
+    seen += bins_[bin];
+    if (seen >= std::max<std::uint64_t>(target, 1))
+      return std::min(max_, kMinSeconds * std::pow(10.0, (bin + 0.5) / kBinsPerDecade));
+  }
+  return max_;
+}
+
+std::string RunStats::toJson() const {
+  std::ostringstream out;
+  out.precision(6);
+  auto latency = [&](const char* name, const LatencyHistogram& h, bool last) {
+    out << "    \"" << name << "\": {\"count\": " << h.count()
+        << ", \"mean_ms\": " << h.mean() * 1e3 << ", \"p50_ms\": " << h.percentile(0.5) * 1e3
+        << ", \"p90_ms\": " << h.percentile(0.9) * 1e3
+        << ", \"p95_ms\": " << h.percentile(0.95) * 1e3
+        << ", \"p99_ms\": " << h.percentile(0.99) * 1e3 << ", \"max_ms\": " << h.max() * 1e3 << "}"
+        << (last ? "\n" : ",\n");
+  };
+  out << "{\n"
+      << "  \"frames_captured\": " << frames_captured << ",\n"
+      << "  \"frames_skipped\": " << frames_skipped << ",\n"
+      << "  \"frames_dropped\": " << frames_dropped << ",\n"
+      << "  \"frames_processed\": " << frames_processed << ",\n"
+      << "  \"frames_without_pose\": " << frames_without_pose << ",\n"
+      << "  \"keyframes\": " << keyframes << ",\n"
+      << "  \"map_points\": " << map_points << ",\n"
+      << "  \"checkpoints_written\": " << checkpoints_written << ",\n"
+      << "  \"checkpoints_failed\": " << checkpoints_failed << ",\n"
+      << "  \"disconnects\": " << disconnects << ",\n"
+      << "  \"wall_seconds\": " << wall_seconds << ",\n"
+      << "  \"frames_per_second\": "
+      << (wall_seconds > 0 ? static_cast<double>(frames_processed) / wall_seconds : 0.0) << ",\n"
+      << "  \"peak_rss_mb\": " << peak_rss_mb << ",\n"
+      << "  \"latency\": {\n";
+  latency("read", read_latency, false);
+  latency("queue_wait", queue_latency, false);
+  latency("pose", pose_latency, false);
+  latency("filter", filter_latency, false);
+  latency("project", project_latency, false);
+  latency("fuse", fuse_latency, false);
+  latency("integrate", integrate_latency, true);
+  out << "  }\n}\n";
+  return out.str();
+}
+
+double peakRssMb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return 0.0;
+}
+
+}  // namespace rgbdmap

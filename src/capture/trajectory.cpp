@@ -1,0 +1,91 @@
+#include "rgbdmap/capture/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <stdexcept>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/text_lines.hpp"
+
+namespace rgbdmap {
+
+Trajectory Trajectory::load(const std::string& path) {
+  Trajectory trajectory;
+  for (const TextLine& line : readTextLines(path)) {
+    if (line.fields.size() != 8)
+      throw InputError(where(path, line.number) +
+                       ": expected 8 fields (timestamp tx ty tz qx qy qz qw), found " +
+                       std::to_string(line.fields.size()));
+    static const char* kNames[] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+    double v[8];
+    for (int i = 0; i < 8; ++i) v[i] = parseNumber(line.fields[i], path, line.number, kNames[i]);
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    const double norm = q.norm();
+    // Files carry 4 decimals, so a correct quaternion is unit to about 1e-4.
+    if (std::abs(norm - 1.0) > 1e-2)
+      throw InputError(where(path, line.number) + ": quaternion norm is " + std::to_string(norm) +
+                       ", expected a unit quaternion");
+    if (!trajectory.empty() && v[0] <= trajectory.poses_.back().timestamp)
+      throw InputError(where(path, line.number) + ": timestamp " + line.fields[0] +
+                       " is not after the previous line's");
+    StampedPose p;
+    p.timestamp = v[0];
+    p.pose = Eigen::Isometry3d::Identity();
+    p.pose.linear() = q.normalized().toRotationMatrix();
+    p.pose.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    trajectory.poses_.push_back(p);
+  }
+  return trajectory;
+}
+
+void Trajectory::save(const std::string& path) const {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error(tmp + ": cannot open for writing");
+    out << "# timestamp tx ty tz qx qy qz qw\n" << std::fixed;
+    for (const StampedPose& p : poses_) {
+      const Eigen::Quaterniond q = Eigen::Quaterniond(p.pose.linear()).normalized();
+      const Eigen::Vector3d t = p.pose.translation();
+      out << std::setprecision(6) << p.timestamp << std::setprecision(7) << ' ' << t.x() << ' '
+          << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w()
+          << '\n';
+    }
+    out.flush();
+    if (!out) throw std::runtime_error(tmp + ": write failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error(path + ": cannot rename temporary file into place");
+  }
+}
+
+std::optional<Eigen::Isometry3d> Trajectory::interpolate(double t, double max_gap) const {
+  if (poses_.empty()) return std::nullopt;
+  const auto after =
+      std::lower_bound(poses_.begin(), poses_.end(), t,
+                       [](const StampedPose& p, double s) { return p.timestamp < s; });
+  if (after != poses_.end() && after->timestamp == t) return after->pose;
+  if (after == poses_.begin() || after == poses_.end()) return std::nullopt;
+  const StampedPose& b = *after;
+  const StampedPose& a = *(after - 1);
+  if (t - a.timestamp > max_gap || b.timestamp - t > max_gap) return std::nullopt;
+  const double s = (t - a.timestamp) / (b.timestamp - a.timestamp);
+  const Eigen::Quaterniond qa(a.pose.linear()), qb(b.pose.linear());
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = qa.slerp(s, qb).toRotationMatrix();
+  pose.translation() = (1.0 - s) * a.pose.translation() + s * b.pose.translation();
+  return pose;
+}
+
+std::vector<double> Trajectory::timestamps() const {
+  std::vector<double> stamps;
+  stamps.reserve(poses_.size());
+  for (const StampedPose& p : poses_) stamps.push_back(p.timestamp);
+  return stamps;
+}
+
+}  // namespace rgbdmap

@@ -1,0 +1,168 @@
+#include "rgbdmap/capture/tum_sequence.hpp"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/text_lines.hpp"
+#include "rgbdmap/capture/association.hpp"
+
+namespace rgbdmap {
+namespace {
+
+struct ListEntry {
+  double time;
+  std::string path;
+  std::size_t line;
+};
+
+bool isDirectory(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+bool isFile(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+std::vector<ListEntry> readList(const std::string& folder, const std::string& name) {
+  const std::string path = folder + "/" + name;
+  if (!isFile(path))
+    throw InputError(path + ": missing (a TUM sequence folder needs " + name + ")");
+  std::vector<ListEntry> list;
+  for (const TextLine& line : readTextLines(path)) {
+    if (line.fields.size() != 2)
+      throw InputError(where(path, line.number) + ": expected 'timestamp filename', found " +
+                       std::to_string(line.fields.size()) + " fields");
+    const double t = parseNumber(line.fields[0], path, line.number, "timestamp");
+    if (!list.empty() && t <= list.back().time)
+      throw InputError(where(path, line.number) + ": timestamp " + line.fields[0] +
+                       " is not after the previous line's");
+    list.push_back({t, folder + "/" + line.fields[1], line.number});
+  }
+  if (list.empty()) throw InputError(path + ": no frames listed");
+  return list;
+}
+
+}  // namespace
+
+TumSequence::TumSequence(const std::string& folder, const Options& options)
+    : folder_(folder), options_(options) {
+  while (folder_.size() > 1 && folder_.back() == '/') folder_.pop_back();
+  if (!isDirectory(folder_)) throw InputError(folder_ + ": no such folder");
+  const std::vector<ListEntry> rgb = readList(folder_, "rgb.txt");
+  const std::vector<ListEntry> depth = readList(folder_, "depth.txt");
+  if (isFile(folder_ + "/groundtruth.txt"))
+    groundtruth_ = Trajectory::load(folder_ + "/groundtruth.txt");
+
+  std::vector<double> rgb_times, depth_times;
+  for (const ListEntry& e : rgb) rgb_times.push_back(e.time);
+  for (const ListEntry& e : depth) depth_times.push_back(e.time);
+  const auto pairs = associate(rgb_times, depth_times, options_.max_difference);
+  unmatched_color_ = rgb.size() - pairs.size();
+  unmatched_depth_ = depth.size() - pairs.size();
+  entries_.reserve(pairs.size());
+  for (const auto& [i, j] : pairs) {
+    TumEntry entry;
+    entry.rgb_time = rgb[i].time;
+    entry.depth_time = depth[j].time;
+    entry.rgb_path = rgb[i].path;
+    entry.depth_path = depth[j].path;
+    entry.rgb_line = rgb[i].line;
+    entry.depth_line = depth[j].line;
+    // Ground truth is of the colour camera, so it is sampled at the colour stamp.
+    entry.pose = groundtruth_.interpolate(entry.rgb_time, options_.max_pose_gap);
+    entries_.push_back(std::move(entry));
+  }
+  if (entries_.empty())
+    throw InputError(folder_ + ": no colour image has a depth image within " +
+                     std::to_string(options_.max_difference) + " s");
+}
+
+std::size_t TumSequence::framesWithoutPose() const {
+  std::size_t n = 0;
+  for (const TumEntry& e : entries_) n += e.pose ? 0 : 1;
+  return n;
+}
+
+std::string TumSequence::presetForFolder(const std::string& folder) {
+  std::string name = folder;
+  while (name.size() > 1 && name.back() == '/') name.pop_back();
+  name = name.substr(name.find_last_of('/') + 1);  // npos + 1 == 0: no slash, whole string
+  const std::string kCamera = "freiburg";
+  const auto at = name.find(kCamera);
+  if (at == std::string::npos || at + kCamera.size() >= name.size()) return "";
+  const char n = name[at + kCamera.size()];
+  return (n >= '1' && n <= '3') ? std::string("tum_fr") + n : "";
+}
+
+bool TumSequence::readImage(const std::string& path, int flags, cv::Mat& out, std::string& error) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) {
+    error = path + ": cannot open image";
+    return false;
+  }
+  const std::streamsize size = in.tellg();
+  in.seekg(0);
+  file_buffer_.resize(static_cast<std::size_t>(std::max<std::streamsize>(size, 0)));
+  if (size <= 0 || !in.read(reinterpret_cast<char*>(file_buffer_.data()), size)) {
+    error = path + ": empty or unreadable image";
+    return false;
+  }
+  // TUM images are PNG. Checking the signature also matters because imdecode leaves `out`
+  // untouched (holding the previous frame) when no decoder recognises the data.
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (file_buffer_.size() < 8 ||
+      !std::equal(kPngSignature, kPngSignature + 8, file_buffer_.begin())) {
+    error = path + ": not a PNG image";
+    return false;
+  }
+  try {
+    // Decoding into `out` reuses its buffer when the size and type match.
+    cv::imdecode(file_buffer_, flags, &out);
+  } catch (const cv::Exception& e) {
+    error = path + ": cannot decode image (" + e.err + ")";
+    return false;
+  }
+  if (out.empty()) {
+    error = path + ": cannot decode image (corrupt or truncated)";
+    return false;
+  }
+  return true;
+}
+
+bool TumSequence::load(std::size_t i, Frame& frame, std::string& error) {
+  const TumEntry& e = entries_.at(i);
+  const std::string rgb_where = where(folder_ + "/rgb.txt", e.rgb_line);
+  const std::string depth_where = where(folder_ + "/depth.txt", e.depth_line);
+  if (!readImage(e.depth_path, cv::IMREAD_UNCHANGED, raw_depth_, error)) {
+    error = depth_where + ": " + error;
+    return false;
+  }
+  if (raw_depth_.type() != CV_16UC1) {
+    error = depth_where + ": " + e.depth_path + ": depth must be a 16-bit single-channel PNG";
+    return false;
+  }
+  if (!readImage(e.rgb_path, cv::IMREAD_COLOR, frame.color, error)) {
+    error = rgb_where + ": " + error;
+    return false;
+  }
+  if (frame.color.size() != raw_depth_.size()) {
+    error = depth_where + ": " + e.depth_path + ": depth is " + std::to_string(raw_depth_.cols) +
+            "x" + std::to_string(raw_depth_.rows) + " but colour " + e.rgb_path + " is " +
+            std::to_string(frame.color.cols) + "x" + std::to_string(frame.color.rows);
+    return false;
+  }
+  raw_depth_.convertTo(frame.depth, CV_32F, 1.0 / options_.depth_scale);
+  frame.timestamp = e.rgb_time;
+  frame.has_pose = e.pose.has_value();
+  if (e.pose) frame.pose = *e.pose;
+  frame.origin = e.rgb_path;
+  return true;
+}
+
+}  // namespace rgbdmap

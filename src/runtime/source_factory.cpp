@@ -1,0 +1,31 @@
+#include "rgbdmap/runtime/source_factory.hpp"
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/capture/tum_source.hpp"
+#include "rgbdmap/drivers/openni2_source.hpp"
+
+namespace rgbdmap {
+
+std::string presetForSource(const std::string& spec) {
+  if (spec.rfind("tum:", 0) == 0) {
+    const std::string preset = TumSequence::presetForFolder(spec.substr(4));
+    return preset.empty() ? "default" : preset;
+  }
+  if (spec.rfind("openni2", 0) == 0) return "kinect_v1";
+  return "default";
+}
+
+std::unique_ptr<FrameSource> openSource(const std::string& spec, const Config& config) {
+  if (spec.rfind("tum:", 0) == 0) {
+    TumSequence::Options options;
+    options.depth_scale = config.depth_scale;
+    options.max_pose_gap = config.pose_max_gap;
+    return std::make_unique<TumSource>(spec.substr(4), options, config.camera, config.rate);
+  }
+  if (spec == "openni2") return openOpenNI2Source("", config);
+  if (spec.rfind("openni2:", 0) == 0) return openOpenNI2Source(spec.substr(8), config);
+  throw InputError("--source " + spec + ": unknown source (expected tum:DIR, openni2, " +
+                   "openni2:URI or openni2:FILE.oni)");
+}
+
+}  // namespace rgbdmap

@@ -1,0 +1,414 @@
+#include "rgbdmap/sim/synthetic_sequence.hpp"
+
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+#include <tsl/hopscotch_map.h>
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
+#include "rgbdmap/base/error.hpp"
+
+namespace rgbdmap {
+namespace {
+
+// A seed for one image row of one frame, so noise does not depend on how rows are scheduled.
+std::uint64_t rowSeed(std::uint64_t seed, int frame, int row) {
+  std::uint64_t x = seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(frame) * 1000003ull +
+                    static_cast<std::uint64_t>(row);
+  x ^= x >> 31;
+  x *= 0xBF58476D1CE4E5B9ull;
+  x ^= x >> 29;
+  return x;
+}
+
+std::string stampName(double stamp) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.6f", stamp);
+  return text;
+}
+
+void validate(const SyntheticSequenceOptions& o) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw InputError("synthetic sequence: " + what);
+  };
+  require(o.frames > 0, "frames must be positive");
+  require(o.fps > 0.0 && o.fps <= 1000.0, "fps must be in (0, 1000]");
+  require(o.loop_seconds > 0.0, "loop_seconds must be positive");
+  require(o.depth_offset >= 0.0 && o.depth_offset_jitter >= 0.0 &&
+              o.depth_offset + o.depth_offset_jitter < 0.019,
+          "depth offset + jitter must stay below TUM's 0.02 s association window");
+  require(o.depth_offset + o.depth_offset_jitter < 0.5 / o.fps,
+          "depth offset + jitter must be under half a frame interval");
+  require(o.groundtruth_rate >= o.fps, "groundtruth_rate must be at least fps");
+  require(o.camera.width > 0 && o.camera.height > 0 && o.camera.fx > 0 && o.camera.fy > 0,
+          "camera intrinsics must be positive");
+  require(!o.camera.hasDistortion(), "the renderer models no lens distortion");
+  require(o.depth_scale > 0.0 && o.max_range * o.depth_scale <= 65535.0,
+          "max_range * depth_scale must fit a 16-bit depth image");
+  require(o.min_range >= 0.0 && o.min_range < o.max_range, "min_range must be below max_range");
+  require(o.dropout >= 0.0 && o.dropout < 1.0, "dropout must be in [0, 1)");
+  require(o.max_incidence_deg > 0.0 && o.max_incidence_deg <= 90.0,
+          "max_incidence_deg must be in (0, 90]");
+  require(o.surface_voxel > 0.0, "surface_voxel must be positive");
+  require(o.png_compression >= 0 && o.png_compression <= 9, "png_compression must be 0..9");
+}
+
+// std::hash of an integer is the identity; packed voxel keys need their bits mixed or the
+// hopscotch map's neighbourhoods overflow (the keys differ mostly in their high bits).
+struct VoxelKeyHash {
+  std::size_t operator()(std::uint64_t x) const {
+    x ^= x >> 33;
+    x *= 0xFF51AFD7ED558CCDull;
+    x ^= x >> 33;
+    x *= 0xC4CEB9FE1A85EC53ull;
+    x ^= x >> 33;
+    return static_cast<std::size_t>(x);
+  }
+};
+
+// visible_surface.pcd: the first exact hit that falls into each voxel (a point on the surface,
+// where a voxel centroid would sit off the surface at edges and on curves).
+class SurfaceSampler {
+ public:
+  explicit SurfaceSampler(double voxel) : inverse_voxel_(1.0 / voxel) {}
+
+  void add(const cv::Vec3f& p, const cv::Vec3b& bgr) {
+    const std::uint64_t key = keyOf(p);
+    if (index_.find(key) != index_.end()) return;
+    index_.emplace(key, static_cast<std::uint32_t>(cloud_.size()));
+    pcl::PointXYZRGB point;
+    point.x = p[0];
+    point.y = p[1];
+    point.z = p[2];
+    point.b = bgr[0];
+    point.g = bgr[1];
+    point.r = bgr[2];
+    cloud_.push_back(point);
+  }
+  pcl::PointCloud<pcl::PointXYZRGB>& cloud() { return cloud_; }
+
+ private:
+  std::uint64_t keyOf(const cv::Vec3f& p) const {
+    // 21 bits per axis around the origin: +-5 km at 5 mm, far beyond any room.
+    auto cell = [&](float v) {
+      return static_cast<std::uint64_t>(std::floor(v * inverse_voxel_) + (1 << 20)) & 0x1FFFFF;
+    };
+    return cell(p[0]) | cell(p[1]) << 21 | cell(p[2]) << 42;
+  }
+
+  double inverse_voxel_;
+  tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> index_;
+  pcl::PointCloud<pcl::PointXYZRGB> cloud_;
+};
+
+void writeImage(const std::string& path, const cv::Mat& image, int compression) {
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, image, {cv::IMWRITE_PNG_COMPRESSION, compression});
+  } catch (const cv::Exception& e) {
+    throw InputError(path + ": cannot write image (" + e.err + ")");
+  }
+  if (!ok) throw InputError(path + ": cannot write image");
+}
+
+void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
+                  const SyntheticSequenceSummary& summary) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "generator" << YAML::Value << "rgbdmap synth";
+  out << YAML::Key << "frames" << YAML::Value << o.frames;
+  out << YAML::Key << "fps" << YAML::Value << o.fps;
+  out << YAML::Key << "seed" << YAML::Value << o.seed;
+  out << YAML::Key << "noise" << YAML::Value << o.noise;
+  out << YAML::Key << "loop_seconds" << YAML::Value << o.loop_seconds;
+  out << YAML::Key << "camera" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "width" << YAML::Value << o.camera.width;
+  out << YAML::Key << "height" << YAML::Value << o.camera.height;
+  out << YAML::Key << "fx" << YAML::Value << o.camera.fx;
+  out << YAML::Key << "fy" << YAML::Value << o.camera.fy;
+  out << YAML::Key << "cx" << YAML::Value << o.camera.cx;
+  out << YAML::Key << "cy" << YAML::Value << o.camera.cy;
+  out << YAML::EndMap;
+  out << YAML::Key << "depth_scale" << YAML::Value << o.depth_scale;
+  out << YAML::Key << "range" << YAML::Value << YAML::Flow << YAML::BeginSeq << o.min_range
+      << o.max_range << YAML::EndSeq;
+  out << YAML::Key << "dropout" << YAML::Value << o.dropout;
+  out << YAML::Key << "max_incidence_deg" << YAML::Value << o.max_incidence_deg;
+  out << YAML::Key << "surface_voxel" << YAML::Value << o.surface_voxel;
+  out << YAML::Key << "surface_points" << YAML::Value << summary.surface_points;
+  out << YAML::EndMap;
+  std::ofstream file(path);
+  file << out.c_str() << '\n';
+  file.flush();
+  if (!file) throw InputError(path + ": cannot write");
+}
+
+}  // namespace
+
+double kinectDepthSigma(double z) { return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4); }
+
+HandheldPath::HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds)
+    : loop_seconds_(loop_seconds) {
+  const Eigen::Vector3d size = room.max - room.min;
+  center_ = 0.5 * (room.min + room.max);
+  center_.z() = room.min.z() + 0.5 * size.z();
+  radius_ = Eigen::Vector2d(0.16 * size.x(), 0.15 * size.y());
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * M_PI);
+  for (double& p : phase_) p = angle(random);
+}
+
+Eigen::Isometry3d HandheldPath::pose(double t) const {
+  const double phi = 2.0 * M_PI * t / loop_seconds_;
+  // Slow circle plus a slow sway (a few cm) and a fast tremor (1 cm), as a hand holds a camera.
+  const Eigen::Vector3d position =
+      center_ +
+      Eigen::Vector3d(radius_.x() * std::cos(phi) + 0.05 * std::sin(2.3 * t + phase_[0]) +
+                          0.01 * std::sin(7.1 * t + phase_[1]),
+                      radius_.y() * std::sin(phi) + 0.05 * std::sin(1.9 * t + phase_[2]) +
+                          0.01 * std::sin(6.3 * t + phase_[3]),
+                      0.10 * std::sin(0.9 * t + phase_[4]) + 0.008 * std::sin(8.3 * t + phase_[5]));
+  // Look outwards, swinging +-17 degrees around the radial direction and 11-25 degrees down,
+  // so surfaces are seen from several positions and angles.
+  const double yaw = phi + 0.3 * std::sin(2.0 * M_PI * t / 4.1 + phase_[6]);
+  const double pitch = -0.32 + 0.12 * std::sin(2.0 * M_PI * t / 3.3 + phase_[7]);
+  const double roll = 0.05 * std::sin(1.3 * t + phase_[0] + phase_[3]);
+  const Eigen::Vector3d forward(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw),
+                                std::sin(pitch));
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d level_right = forward.cross(up).normalized();
+  const Eigen::Vector3d level_down = forward.cross(level_right);
+  const Eigen::Vector3d right = std::cos(roll) * level_right + std::sin(roll) * level_down;
+  const Eigen::Vector3d down = forward.cross(right);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear().col(0) = right;
+  pose.linear().col(1) = down;
+  pose.linear().col(2) = forward;
+  pose.translation() = position;
+  return pose;
+}
+
+SyntheticRenderer::SyntheticRenderer(const SyntheticScene& scene, const CameraIntrinsics& camera)
+    : scene_(scene), camera_(camera) {
+  rays_.resize(static_cast<std::size_t>(camera.width) * camera.height);
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u)
+      rays_[static_cast<std::size_t>(v) * camera.width + u] =
+          Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+  const ScenePrimitive& room = scene.room();
+  light_ = 0.5 * (room.min + room.max);
+  light_.z() = room.max.z() - 0.3;
+}
+
+void SyntheticRenderer::render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv::Mat& color,
+                               cv::Mat& incidence_cos, cv::Mat& hits) const {
+  const int width = camera_.width, height = camera_.height;
+  depth.create(height, width, CV_32FC1);
+  color.create(height, width, CV_8UC3);
+  incidence_cos.create(height, width, CV_32FC1);
+  hits.create(height, width, CV_32FC3);
+  const Eigen::Matrix3d rotation = pose.linear();
+  const Eigen::Vector3d origin = pose.translation();
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      auto* depth_row = depth.ptr<float>(v);
+      auto* color_row = color.ptr<cv::Vec3b>(v);
+      auto* cos_row = incidence_cos.ptr<float>(v);
+      auto* hit_row = hits.ptr<cv::Vec3f>(v);
+      for (int u = 0; u < width; ++u) {
+        const Eigen::Vector3d& ray = rays_[static_cast<std::size_t>(v) * width + u];
+        const Eigen::Vector3d direction = rotation * ray;
+        double t = 0.0;
+        Eigen::Vector3d normal;
+        cv::Vec3b albedo;
+        if (!scene_.raycast(origin, direction, t, normal, albedo)) {
+          depth_row[u] = 0.0f;
+          color_row[u] = cv::Vec3b(0, 0, 0);
+          cos_row[u] = 0.0f;
+          hit_row[u] = cv::Vec3f(0, 0, 0);
+          continue;
+        }
+        // The ray has z = 1 in the camera frame, so t is the depth along the optical axis.
+        depth_row[u] = static_cast<float>(t);
+        const Eigen::Vector3d point = origin + t * direction;
+        hit_row[u] = cv::Vec3f(static_cast<float>(point.x()), static_cast<float>(point.y()),
+                               static_cast<float>(point.z()));
+        cos_row[u] = static_cast<float>(-normal.dot(direction) / direction.norm());
+        // Lambertian light from a fixed lamp: shading depends on the surface only, not on the
+        // view, so the brightness-constancy assumption of RGB odometry holds.
+        const double lit = std::max(0.0, normal.dot((light_ - point).normalized()));
+        const double shade = 0.6 + 0.4 * lit;
+        for (int c = 0; c < 3; ++c)
+          color_row[u][c] = static_cast<unsigned char>(std::lround(albedo[c] * shade));
+      }
+    }
+  });
+}
+
+SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
+                                                const SyntheticScene& scene,
+                                                const SyntheticSequenceOptions& options) {
+  namespace fs = std::filesystem;
+  validate(options);
+  const auto start = std::chrono::steady_clock::now();
+  std::error_code ec;
+  for (const char* sub : {"rgb", "depth"}) {
+    fs::create_directories(fs::path(folder) / sub, ec);
+    if (ec) throw InputError(folder + "/" + sub + ": cannot create folder (" + ec.message() + ")");
+  }
+
+  const HandheldPath path(scene.room(), options.seed, options.loop_seconds);
+  const double duration = (options.frames - 1) / options.fps;
+  const int gt_margin = 5;  // samples of ground truth before the first and after the last frame
+  const int gt_samples = static_cast<int>(std::ceil(duration * options.groundtruth_rate));
+  for (int k = -gt_margin; k <= gt_samples + gt_margin; ++k) {
+    const Eigen::Vector3d p = path.pose(k / options.groundtruth_rate).translation();
+    if (!scene.isFreeSpace(p, options.camera_margin))
+      throw InputError("synthetic sequence: the camera path comes within " +
+                       std::to_string(options.camera_margin) +
+                       " m of a surface at t = " + std::to_string(k / options.groundtruth_rate) +
+                       " s; the scene leaves too little free space around the room's centre");
+  }
+
+  std::ofstream groundtruth(folder + "/groundtruth.txt");
+  groundtruth << "# ground truth trajectory (rgbdmap synth, analytic path sampled at "
+              << options.groundtruth_rate << " Hz)\n# timestamp tx ty tz qx qy qz qw\n";
+  for (int k = -gt_margin; k <= gt_samples + gt_margin; ++k) {
+    const double t = k / options.groundtruth_rate;
+    const Eigen::Isometry3d pose = path.pose(t);
+    const Eigen::Quaterniond q(pose.linear());
+    const Eigen::Vector3d p = pose.translation();
+    char line[256];
+    std::snprintf(line, sizeof(line), "%.6f %.7f %.7f %.7f %.9f %.9f %.9f %.9f\n",
+                  options.start_time + t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
+    groundtruth << line;
+  }
+  groundtruth.flush();
+  if (!groundtruth) throw InputError(folder + "/groundtruth.txt: cannot write");
+
+  std::ofstream rgb_list(folder + "/rgb.txt"), depth_list(folder + "/depth.txt");
+  rgb_list << "# color images (rgbdmap synth)\n# timestamp filename\n";
+  depth_list << "# depth images (rgbdmap synth), 16-bit PNG, " << options.depth_scale
+             << " units per metre, 0 = no measurement\n# timestamp filename\n";
+
+  const CameraIntrinsics& camera = options.camera;
+  const SyntheticRenderer renderer(scene, camera);
+  SurfaceSampler surface(options.surface_voxel);
+  cv::Mat depth, color, incidence_cos, hits;
+  cv::Mat depth16(camera.height, camera.width, CV_16UC1);
+  cv::Mat visible(camera.height, camera.width, CV_8UC1);
+  const float min_cos = static_cast<float>(std::cos(options.max_incidence_deg * M_PI / 180.0));
+  std::size_t valid_pixels = 0;
+  std::mt19937_64 stamp_random(options.seed ^ 0x5EEDull);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+
+  for (int i = 0; i < options.frames; ++i) {
+    const double t = i / options.fps;
+    const double rgb_stamp = options.start_time + t;
+    const double depth_stamp =
+        rgb_stamp + options.depth_offset + options.depth_offset_jitter * unit(stamp_random);
+    renderer.render(path.pose(t), depth, color, incidence_cos, hits);
+
+    cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
+      for (int v = rows.start; v < rows.end; ++v) {
+        std::mt19937_64 random(rowSeed(options.seed, i, v));
+        std::normal_distribution<float> gauss(0.0f, 1.0f);
+        std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+        const auto* z_row = depth.ptr<float>(v);
+        const auto* cos_row = incidence_cos.ptr<float>(v);
+        auto* out_row = depth16.ptr<std::uint16_t>(v);
+        auto* visible_row = visible.ptr<unsigned char>(v);
+        auto* color_row = color.ptr<cv::Vec3b>(v);
+        for (int u = 0; u < camera.width; ++u) {
+          const double z = z_row[u];
+          // The reference surface is what an ideal sensor measures: in range, not grazing.
+          const bool measurable =
+              z >= options.min_range && z <= options.max_range && cos_row[u] >= min_cos;
+          visible_row[u] = measurable ? 1 : 0;
+          double measured = measurable ? z : 0.0;
+          if (options.noise) {
+            // Draw every random number for every pixel so the stream does not depend on hits.
+            const double n = gauss(random);
+            const bool dropped = uniform(random) < options.dropout;
+            for (int c = 0; c < 3; ++c) {
+              const double value = color_row[u][c] + options.color_noise * gauss(random);
+              color_row[u][c] =
+                  static_cast<unsigned char>(std::clamp(std::lround(value), 0l, 255l));
+            }
+            if (measured > 0.0) measured += kinectDepthSigma(z) * n;
+            if (dropped || measured < options.min_range || measured > options.max_range)
+              measured = 0.0;
+          }
+          out_row[u] = static_cast<std::uint16_t>(std::lround(measured * options.depth_scale));
+        }
+      }
+    });
+    valid_pixels += static_cast<std::size_t>(cv::countNonZero(depth16));
+    for (int v = 0; v < camera.height; ++v) {
+      const auto* visible_row = visible.ptr<unsigned char>(v);
+      const auto* hit_row = hits.ptr<cv::Vec3f>(v);
+      const auto* color_row = color.ptr<cv::Vec3b>(v);
+      for (int u = 0; u < camera.width; ++u)
+        if (visible_row[u]) surface.add(hit_row[u], color_row[u]);
+    }
+
+    const std::string rgb_name = "rgb/" + stampName(rgb_stamp) + ".png";
+    const std::string depth_name = "depth/" + stampName(depth_stamp) + ".png";
+    // Colour and depth are encoded side by side; PNG encoding is most of a frame's cost.
+    // An exception must not leave a worker thread, so each job reports its error as text.
+    std::string write_errors[2];
+    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& jobs) {
+      for (int job = jobs.start; job < jobs.end; ++job) {
+        try {
+          if (job == 0)
+            writeImage(folder + "/" + rgb_name, color, options.png_compression);
+          else
+            writeImage(folder + "/" + depth_name, depth16, options.png_compression);
+        } catch (const std::exception& e) {
+          write_errors[job] = e.what();
+        }
+      }
+    });
+    for (const std::string& error : write_errors)
+      if (!error.empty()) throw InputError(error);
+    rgb_list << stampName(rgb_stamp) << ' ' << rgb_name << '\n';
+    depth_list << stampName(depth_stamp) << ' ' << depth_name << '\n';
+  }
+  rgb_list.flush();
+  depth_list.flush();
+  if (!rgb_list) throw InputError(folder + "/rgb.txt: cannot write");
+  if (!depth_list) throw InputError(folder + "/depth.txt: cannot write");
+
+  try {
+    scene.save(folder + "/scene.yaml");
+  } catch (const std::runtime_error& e) {
+    throw InputError(e.what());
+  }
+  const std::string surface_path = folder + "/visible_surface.pcd";
+  pcl::PointCloud<pcl::PointXYZRGB>& cloud = surface.cloud();
+  cloud.width = static_cast<std::uint32_t>(cloud.size());
+  cloud.height = 1;
+  cloud.is_dense = true;
+  if (cloud.empty() || pcl::io::savePCDFileBinary(surface_path, cloud) != 0)
+    throw InputError(surface_path + ": cannot write the visible surface" +
+                     (cloud.empty() ? std::string(" (the camera saw no surface in range)") : ""));
+
+  SyntheticSequenceSummary summary;
+  summary.frames = options.frames;
+  summary.surface_points = cloud.size();
+  summary.valid_depth_share = static_cast<double>(valid_pixels) /
+                              (static_cast<double>(options.frames) * camera.width * camera.height);
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  writeOptions(folder + "/synthetic.yaml", options, summary);
+  return summary;
+}
+
+}  // namespace rgbdmap
