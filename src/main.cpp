@@ -146,6 +146,7 @@ int runMapping(const MapOptions& o) {
   PipelineOutputs outputs;
   outputs.map_path = o.out;
   outputs.trajectory_path = stem(o.out) + "_keyframes.txt";
+  outputs.frame_trajectory_path = stem(o.out) + "_trajectory.txt";
   outputs.config_path = stem(o.out) + ".yaml";
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());

@@ -139,8 +139,9 @@ std::vector<Config::Key> Config::keys() {
       text("pose.trajectory", &pose_trajectory, "TUM trajectory file when pose.source=trajectory"),
       number("pose.max_gap", &pose_max_gap, 0, 10,
              "a frame farther than this (s) from any pose sample gets no pose and is not mapped"),
-      choice("keyframe.policy", &keyframe_policy, {"interval", "motion", "both"},
-             "interval: every N frames; motion: after moving; both: whichever comes first"),
+      choice("keyframe.policy", &keyframe_policy, {"auto", "interval", "motion", "both"},
+             "interval: every N frames; motion: after moving; both: whichever comes first; auto: "
+             "motion with odometry, else interval"),
       integer("keyframe.every_n", &keyframe_every_n, 1, 1000000, "frames between keyframes"),
       number("keyframe.min_translation", &keyframe_min_translation, 0, 100,
              "metres moved since the last keyframe that make a new one"),

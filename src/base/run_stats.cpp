@@ -56,6 +56,10 @@ std::string RunStats::toJson() const {
       << "  \"checkpoints_written\": " << checkpoints_written << ",\n"
       << "  \"checkpoints_failed\": " << checkpoints_failed << ",\n"
       << "  \"disconnects\": " << disconnects << ",\n"
+      << "  \"frames_tracked\": " << frames_tracked << ",\n"
+      << "  \"frames_lost\": " << frames_lost << ",\n"
+      << "  \"frames_relocalised\": " << frames_relocalised << ",\n"
+      << "  \"keyframes_deferred\": " << keyframes_deferred << ",\n"
       << "  \"wall_seconds\": " << wall_seconds << ",\n"
       << "  \"frames_per_second\": "
       << (wall_seconds > 0 ? static_cast<double>(frames_processed) / wall_seconds : 0.0) << ",\n"
@@ -64,6 +68,7 @@ std::string RunStats::toJson() const {
   latency("read", read_latency, false);
   latency("queue_wait", queue_latency, false);
   latency("pose", pose_latency, false);
+  latency("track", track_latency, false);
   latency("filter", filter_latency, false);
   latency("project", project_latency, false);
   latency("fuse", fuse_latency, false);

@@ -76,11 +76,13 @@ CheckpointWriter::~CheckpointWriter() {
   thread_.join();
 }
 
-void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::string& path) {
+void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
+                              std::vector<TrajectoryFile> trajectories) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = std::move(cloud);
     pending_path_ = path;
+    pending_trajectories_ = std::move(trajectories);
   }
   wake_.notify_all();
 }
@@ -98,6 +100,8 @@ void CheckpointWriter::run() {
     if (!pending_) break;  // stop requested and nothing left to write
     std::shared_ptr<const MapCloud> cloud = std::move(pending_);
     const std::string path = pending_path_;
+    const std::vector<TrajectoryFile> trajectories = std::move(pending_trajectories_);
+    pending_trajectories_.clear();
     pending_.reset();
     busy_ = true;
     lock.unlock();
@@ -107,6 +111,14 @@ void CheckpointWriter::run() {
     result.points = cloud->size();
     const auto start = std::chrono::steady_clock::now();
     result.ok = writePcdAtomically(*cloud, path, result.error);
+    for (const TrajectoryFile& t : trajectories) {
+      try {
+        t.trajectory->save(t.path);
+      } catch (const std::exception& e) {
+        result.error += std::string(result.error.empty() ? "" : "; ") + e.what();
+        result.ok = false;
+      }
+    }
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     (result.ok ? written_ : failed_).fetch_add(1);

@@ -47,6 +47,11 @@ Frame* FrameQueue::acquire() {
   return frame;
 }
 
+Frame* FrameQueue::tryAcquire() {
+  Frame* frame = nullptr;
+  return !closed_.load() && free_.pop(frame) ? frame : nullptr;
+}
+
 void FrameQueue::push(Frame* frame) {
   if (frame == overflow_) {
     dropped_.fetch_add(1);  // the whole pool is queued: this newest capture cannot be kept

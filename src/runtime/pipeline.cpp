@@ -10,14 +10,20 @@
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/mapping/frame_tracker.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
+#include "rgbdmap/runtime/fusion_thread.hpp"
 
 namespace rgbdmap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Keyframes that may wait for fusion. A few absorb a burst (a fast turn) while fusion catches
+// up; more would only let the map lag further behind tracking (each slot holds a 640x480 frame).
+constexpr std::size_t kFusionSlots = 4;
 
 double now() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
 
@@ -42,15 +48,30 @@ std::string statusLine(const RunStats& s, double elapsed) {
   char line[256];
   std::snprintf(line, sizeof line,
                 "frames %llu read, %llu dropped, %llu skipped | %.1f fps | keyframes %llu | map "
-                "%llu points | queue %llu",
+                "%llu points | queue %llu%s",
                 static_cast<unsigned long long>(s.frames_captured.load()),
                 static_cast<unsigned long long>(s.frames_dropped.load()),
                 static_cast<unsigned long long>(s.frames_skipped.load()),
                 elapsed > 0 ? static_cast<double>(s.frames_processed.load()) / elapsed : 0.0,
                 static_cast<unsigned long long>(s.keyframes.load()),
                 static_cast<unsigned long long>(s.map_points.load()),
-                static_cast<unsigned long long>(s.queue_depth.load()));
+                static_cast<unsigned long long>(s.queue_depth.load()),
+                s.tracking_lost.load() ? " | tracking lost" : "");
   return line;
+}
+
+// The trajectories written with every checkpoint: keyframes (from the fusion side) and every
+// frame (from the tracking side).
+std::vector<CheckpointWriter::TrajectoryFile> trajectoryFiles(
+    const PipelineOutputs& outputs, const Mapper& mapper,
+    std::shared_ptr<const Trajectory> frames) {
+  std::vector<CheckpointWriter::TrajectoryFile> files;
+  if (!outputs.trajectory_path.empty())
+    files.push_back(
+        {std::make_shared<const Trajectory>(mapper.keyframeTrajectory()), outputs.trajectory_path});
+  if (!outputs.frame_trajectory_path.empty())
+    files.push_back({std::move(frames), outputs.frame_trajectory_path});
+  return files;
 }
 
 }  // namespace
@@ -61,9 +82,11 @@ Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineO
 int Pipeline::run(RunControl& control) {
   const CameraIntrinsics camera = source_->intrinsics();
   config_.camera = camera;
-  Mapper mapper(config_, makePoseProvider(config_), stats_);
+  FrameTracker tracker(config_, makePoseProvider(config_), stats_);
+  Mapper mapper(config_, stats_);
   spdlog::info("source: {}", source_->describe());
-  spdlog::info("poses: {}", mapper.poses().describe());
+  spdlog::info("poses: {}, keyframes: {}", tracker.poses().describe(),
+               effectiveKeyframePolicy(config_));
   if (!outputs_.config_path.empty()) {
     std::ofstream(outputs_.config_path) << config_.toYaml();
   }
@@ -130,6 +153,23 @@ int Pipeline::run(RunControl& control) {
     queue.close();
   });
 
+  // Keyframes go to the fusion thread; tracking never waits for fusion, except in a lossless
+  // replay, where waiting keeps the set of keyframes (and so the map) independent of timing.
+  const bool live = source_->isLive();
+  FusionThread fusion(mapper, kFusionSlots, camera.width, camera.height,
+                      [&](const std::string& message) {
+                        error.set(message);
+                        control.stop.store(true);
+                      });
+  // Checkpoints: the tracking thread copies the per-frame trajectory (cheap), the fusion thread
+  // adds the map snapshot and the keyframe trajectory and hands all to the writer.
+  auto checkpoint = [&] {
+    auto frames = std::make_shared<const Trajectory>(tracker.trajectory());
+    fusion.request([this, &writer, frames](const Mapper& m) {
+      writer.submit(m.snapshot(), outputs_.map_path, trajectoryFiles(outputs_, m, frames));
+    });
+  };
+
   std::atomic<bool> mapping_done{false};
   std::thread mapping([&] {
     double last_checkpoint = now();
@@ -138,17 +178,25 @@ int Pipeline::run(RunControl& control) {
     while (!finished) {
       // Frames may stop coming (camera unplugged), so wake up regularly for checkpoints.
       if (Frame* frame = queue.pop(std::chrono::milliseconds(100), finished)) {
+        const auto track_start = Clock::now();
         stats_.queue_latency.record(now() - frame->captured_at);
         try {
-          mapper.process(*frame);
+          if (tracker.track(*frame)) {
+            if (fusion.submit(*frame, !live))
+              tracker.acceptKeyframe(*frame);
+            else
+              stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
+          }
         } catch (const std::exception& e) {
           error.set(std::string(frame->origin) + ": " + e.what());
           control.stop.store(true);
         }
         queue.release(frame);
         stats_.frames_processed.fetch_add(1);
+        stats_.track_latency.record(
+            std::chrono::duration<double>(Clock::now() - track_start).count());
       }
-      const std::uint64_t keyframes = stats_.keyframes.load();
+      const std::uint64_t keyframes = tracker.keyframesAccepted();
       const bool by_count = config_.checkpoint_every_keyframes > 0 &&
                             keyframes - keyframes_at_checkpoint >=
                                 static_cast<std::uint64_t>(config_.checkpoint_every_keyframes);
@@ -156,7 +204,7 @@ int Pipeline::run(RunControl& control) {
                            now() - last_checkpoint >= config_.checkpoint_every_seconds &&
                            keyframes > keyframes_at_checkpoint;
       if (control.snapshot.exchange(false) || by_count || by_time) {
-        writer.submit(mapper.snapshot(), outputs_.map_path);
+        checkpoint();
         keyframes_at_checkpoint = keyframes;
         last_checkpoint = now();
       }
@@ -189,13 +237,17 @@ int Pipeline::run(RunControl& control) {
   }
   capture.join();
   mapping.join();
+  if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());
+  fusion.finish();
   stats_.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   stats_.frames_dropped.store(queue.dropped());
   stats_.queue_depth.store(0);
   if (tty) std::fprintf(stderr, "\r%s\033[K\n", statusLine(stats_, stats_.wall_seconds).c_str());
 
   // Final save, through the writer so it is ordered after any checkpoint in flight.
-  writer.submit(mapper.snapshot(), outputs_.map_path);
+  writer.submit(
+      mapper.snapshot(), outputs_.map_path,
+      trajectoryFiles(outputs_, mapper, std::make_shared<const Trajectory>(tracker.trajectory())));
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
   if (!final_write.ok) {
@@ -203,14 +255,6 @@ int Pipeline::run(RunControl& control) {
     exit_code = 1;
   } else {
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
-  }
-  if (!outputs_.trajectory_path.empty()) {
-    try {
-      mapper.keyframeTrajectory().save(outputs_.trajectory_path);
-    } catch (const std::exception& e) {
-      spdlog::error("keyframe trajectory not saved: {}", e.what());
-      exit_code = 1;
-    }
   }
   stats_.peak_rss_mb = peakRssMb();
   const std::string fatal = error.get();

@@ -27,10 +27,10 @@ struct Config {
   std::string pose_trajectory;       // pose.trajectory: TUM file for pose.source=trajectory
   double pose_max_gap = 0.05;        // pose.max_gap: s to the nearest ground truth sample
 
-  std::string keyframe_policy = "interval";  // keyframe.policy: interval | motion | both
-  int keyframe_every_n = 10;                 // keyframe.every_n
-  double keyframe_min_translation = 0.05;    // keyframe.min_translation (m)
-  double keyframe_min_rotation = 0.0873;     // keyframe.min_rotation (rad, 5 degrees)
+  std::string keyframe_policy = "auto";    // keyframe.policy: auto | interval | motion | both
+  int keyframe_every_n = 10;               // keyframe.every_n
+  double keyframe_min_translation = 0.05;  // keyframe.min_translation (m)
+  double keyframe_min_rotation = 0.0873;   // keyframe.min_rotation (rad, 5 degrees)
 
   double min_depth = 0.3;  // filter.min_depth (m)
   double max_depth = 4.0;  // filter.max_depth (m)

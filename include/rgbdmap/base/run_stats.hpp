@@ -26,7 +26,7 @@ class LatencyHistogram {
 };
 
 // Counters shared by the capture, mapping and status threads (atomics), and per-stage latency
-// histograms owned by the mapping thread (read only after it has stopped).
+// histograms each written by one thread (read only after the threads have stopped).
 struct RunStats {
   std::atomic<std::uint64_t> frames_captured{0};   // delivered by the source
   std::atomic<std::uint64_t> frames_skipped{0};    // unusable captures (bad image, size)
@@ -39,6 +39,15 @@ struct RunStats {
   std::atomic<std::uint64_t> checkpoints_failed{0};
   std::atomic<std::uint64_t> queue_depth{0};
   std::atomic<std::uint64_t> disconnects{0};
+  // Tracking, per frame: a pose good to map, tracking failed (the frame keeps the predicted pose
+  // in the trajectory and is not mapped), recovered after a loss.
+  std::atomic<std::uint64_t> frames_tracked{0};
+  std::atomic<std::uint64_t> frames_lost{0};
+  std::atomic<std::uint64_t> frames_relocalised{0};
+  // Keyframes proposed while every fusion slot was busy (live sources): the next frame is
+  // proposed instead, nothing is dropped.
+  std::atomic<std::uint64_t> keyframes_deferred{0};
+  std::atomic<bool> tracking_lost{false};  // the last frame was lost (status line)
 
   LatencyHistogram read_latency;       // capture: read + decode + convert
   LatencyHistogram filter_latency;     // mapping: depth filtering
@@ -46,6 +55,7 @@ struct RunStats {
   LatencyHistogram fuse_latency;       // voxel fusion
   LatencyHistogram integrate_latency;  // whole keyframe integration
   LatencyHistogram pose_latency;       // pose estimation
+  LatencyHistogram track_latency;      // tracking thread, per frame: pose, keyframe?, hand-off
   LatencyHistogram queue_latency;      // capture-to-mapping: time a frame waited in the queue
 
   double wall_seconds = 0.0;

@@ -7,7 +7,9 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
+#include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 
 namespace rgbdmap {
@@ -30,11 +32,17 @@ class CheckpointWriter {
     double seconds = 0.0;
   };
   using Callback = std::function<void(const Result&)>;
+  // A trajectory written beside the map in the same checkpoint (TUM format, temp file + rename).
+  struct TrajectoryFile {
+    std::shared_ptr<const Trajectory> trajectory;
+    std::string path;
+  };
 
   explicit CheckpointWriter(Callback on_done = nullptr);
   ~CheckpointWriter();  // finishes a pending write, then stops
 
-  void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path);
+  void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
+              std::vector<TrajectoryFile> trajectories = {});
   // Waits until nothing is pending or being written. Returns the last result.
   Result flush();
   std::uint64_t written() const { return written_.load(); }
@@ -48,6 +56,7 @@ class CheckpointWriter {
   std::condition_variable wake_, idle_;
   std::shared_ptr<const MapCloud> pending_;
   std::string pending_path_;
+  std::vector<TrajectoryFile> pending_trajectories_;
   bool busy_ = false;
   bool stop_ = false;
   Result last_;

@@ -34,6 +34,9 @@ class FrameQueue {
   // Producer side. acquire() hands out an empty frame to fill; never blocks in kDropOldest.
   // Returns nullptr only after close().
   Frame* acquire();
+  // Like acquire(), but nullptr at once when no frame of the pool is free (never the overflow
+  // frame).
+  Frame* tryAcquire();
   // Queues a frame from acquire(). Never blocks.
   void push(Frame* frame);
   // No more frames will come; the consumer drains what is queued, then pop() finishes.

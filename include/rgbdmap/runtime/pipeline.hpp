@@ -18,13 +18,15 @@ struct RunControl {
 
 struct PipelineOutputs {
   std::string map_path = "map.pcd";
-  std::string trajectory_path;  // keyframe poses, TUM format ("" = none)
-  std::string config_path;      // effective configuration ("" = none)
+  std::string trajectory_path;        // keyframe poses, TUM format ("" = none)
+  std::string frame_trajectory_path;  // the pose of every frame, TUM format ("" = none)
+  std::string config_path;            // effective configuration ("" = none)
   bool status_line = true;
 };
 
-// The running system: a capture thread reads the source into a bounded queue, a mapping thread
-// turns frames into the map and triggers checkpoints, a writer thread writes them. run() returns
+// The running system: a capture thread reads the source into a bounded queue, a tracking thread
+// gives every frame its pose, picks keyframes and triggers checkpoints, a fusion thread fuses the
+// keyframes into the map and takes its snapshots, a writer thread writes them. run() returns
 // after the source ends or a stop is requested, with the final map written.
 class Pipeline {
  public:

@@ -1,0 +1,57 @@
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/mapping/mapper.hpp"
+#include "rgbdmap/runtime/frame_queue.hpp"
+
+namespace rgbdmap {
+
+// Fuses keyframes into the map on its own thread, so that tracking (the thread that submits
+// them) never waits for a slow keyframe. A keyframe is copied into one of a few preallocated
+// slots, so the capture pool's frame goes back at once and steady state allocates nothing;
+// keyframes are fused one at a time in the order submitted, so a lossless replay gives the same
+// map every time. Map snapshots (checkpoints) are taken here too, between two keyframes: the
+// tracking thread only asks for one.
+class FusionThread {
+ public:
+  using ErrorHandler = std::function<void(const std::string&)>;
+  using MapTask = std::function<void(const Mapper&)>;
+
+  // `slots`: keyframes that may wait for fusion (plus the one being fused); images are
+  // width x height.
+  FusionThread(Mapper& mapper, std::size_t slots, int width, int height, ErrorHandler on_error);
+  ~FusionThread();  // finish()
+
+  // Hands a keyframe over. With `wait`, blocks until a slot is free (replay: lossless and
+  // deterministic); without, returns false at once when every slot is busy (live: the caller
+  // proposes a later frame instead).
+  bool submit(const Frame& keyframe, bool wait);
+  // Runs `task` on the fusion thread with the map between two keyframes (e.g. to take a
+  // checkpoint snapshot). A request not yet served is replaced by a newer one.
+  void request(MapTask task);
+  // Fuses every submitted keyframe, then stops the thread. A request not served by then is
+  // dropped (the caller's final save follows). After this, the Mapper is the caller's again.
+  void finish();
+  std::size_t queued() const { return keyframes_.depth(); }
+
+ private:
+  void run();
+  void serveRequest();
+
+  Mapper& mapper_;
+  FrameQueue keyframes_;
+  ErrorHandler on_error_;
+  std::mutex request_mutex_;  // taken only when a request is made or served
+  MapTask pending_;
+  std::atomic<bool> requested_{false};
+  std::thread thread_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,61 @@
+#include "rgbdmap/mapping/frame_tracker.hpp"
+
+#include <chrono>
+#include <vector>
+
+namespace rgbdmap {
+namespace {
+
+// Room for the per-frame trajectory reserved up front (18 minutes at 30 frames/s), so appending
+// a pose does not allocate in a run of ordinary length; longer runs grow it rarely (doubling).
+constexpr std::size_t kReservedFrames = 1 << 15;
+
+Trajectory reservedTrajectory() {
+  std::vector<StampedPose> poses;
+  poses.reserve(kReservedFrames);
+  return Trajectory(std::move(poses));
+}
+
+}  // namespace
+
+FrameTracker::FrameTracker(const Config& config, std::unique_ptr<PoseProvider> poses,
+                           RunStats& stats)
+    : poses_(std::move(poses)),
+      selector_(makeKeyframeSelector(config)),
+      trajectory_(reservedTrajectory()),
+      stats_(stats) {}
+
+bool FrameTracker::track(Frame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  const bool posed = poses_->estimate(frame);
+  stats_.pose_latency.record(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  const TrackingState state = poses_->state();
+  switch (state) {
+    case TrackingState::kTracked:
+      stats_.frames_tracked.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case TrackingState::kRelocalised:
+      stats_.frames_relocalised.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case TrackingState::kLost:
+      stats_.frames_lost.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case TrackingState::kNoPose:
+      break;
+  }
+  stats_.tracking_lost.store(state == TrackingState::kLost, std::memory_order_relaxed);
+  if (posed || state == TrackingState::kLost) trajectory_.push_back({frame.timestamp, frame.pose});
+  if (!posed) {
+    stats_.frames_without_pose.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  return selector_.wants(frame.pose);
+}
+
+void FrameTracker::acceptKeyframe(const Frame& frame) {
+  selector_.accept(frame.pose);
+  ++keyframes_accepted_;
+}
+
+}  // namespace rgbdmap

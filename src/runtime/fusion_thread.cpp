@@ -1,0 +1,90 @@
+#include "rgbdmap/runtime/fusion_thread.hpp"
+
+#include <chrono>
+#include <exception>
+
+namespace rgbdmap {
+namespace {
+
+// Same-size images are copied in place and the origin fits the reserved capacity: no allocation.
+void copyFrame(const Frame& from, Frame& to) {
+  to.index = from.index;
+  to.timestamp = from.timestamp;
+  from.depth.copyTo(to.depth);
+  from.color.copyTo(to.color);
+  to.has_pose = from.has_pose;
+  to.pose = from.pose;
+  to.origin.assign(from.origin);
+  to.captured_at = from.captured_at;
+}
+
+}  // namespace
+
+FusionThread::FusionThread(Mapper& mapper, std::size_t slots, int width, int height,
+                           ErrorHandler on_error)
+    : mapper_(mapper),
+      keyframes_(slots, QueuePolicy::kBlock, width, height),
+      on_error_(std::move(on_error)),
+      thread_([this] { run(); }) {}
+
+FusionThread::~FusionThread() { finish(); }
+
+bool FusionThread::submit(const Frame& keyframe, bool wait) {
+  Frame* slot = wait ? keyframes_.acquire() : keyframes_.tryAcquire();
+  if (!slot) return false;
+  copyFrame(keyframe, *slot);
+  keyframes_.push(slot);
+  return true;
+}
+
+void FusionThread::request(MapTask task) {
+  {
+    std::lock_guard<std::mutex> lock(request_mutex_);
+    pending_ = std::move(task);
+  }
+  requested_.store(true);
+}
+
+void FusionThread::finish() {
+  keyframes_.close();
+  if (thread_.joinable()) thread_.join();
+}
+
+void FusionThread::serveRequest() {
+  MapTask task;
+  {
+    std::lock_guard<std::mutex> lock(request_mutex_);
+    std::swap(task, pending_);
+  }
+  if (task) task(mapper_);
+}
+
+void FusionThread::run() {
+  bool finished = false;
+  bool failed = false;
+  while (!finished) {
+    // Short waits: a checkpoint request is served within this even when no keyframe comes.
+    Frame* keyframe = keyframes_.pop(std::chrono::milliseconds(20), finished);
+    if (keyframe) {
+      // After a failure the remaining keyframes are drained unfused: the map stays as it was.
+      if (!failed) {
+        try {
+          mapper_.fuse(*keyframe);
+        } catch (const std::exception& e) {
+          failed = true;
+          if (on_error_) on_error_(keyframe->origin + ": " + e.what());
+        }
+      }
+      keyframes_.release(keyframe);
+    }
+    if (!finished && requested_.exchange(false)) {
+      try {
+        serveRequest();
+      } catch (const std::exception& e) {
+        if (on_error_) on_error_(std::string("checkpoint: ") + e.what());
+      }
+    }
+  }
+}
+
+}  // namespace rgbdmap
