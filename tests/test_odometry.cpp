@@ -21,7 +21,8 @@ std::string mapWithOdometry(const std::string& source, const std::string& dir) {
   std::string output;
   EXPECT_EQ(test::run(test::binary() + " --source " + source + " --out " + dir +
                           "/map.pcd --rate max --set pose.source=odometry "
-                          "--set keyframe.every_n=1 -q --no-render --stats " +
+                          "--set keyframe.policy=interval --set keyframe.every_n=1 "
+                          "-q --no-render --stats " +
                           dir + "/stats.json",
                       &output),
             0)

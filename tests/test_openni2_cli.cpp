@@ -67,8 +67,9 @@ TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
   const std::string dir = test::freshDir();
   std::string output;
   const int code = test::run(test::binary() + " --source openni2:" + oniFile() + " --out " + dir +
-                                 "/map.pcd --rate max --set keyframe.every_n=1 --stats " + dir +
-                                 "/stats.json -q",
+                                 "/map.pcd --rate max --set keyframe.policy=interval "
+                                 "--set keyframe.every_n=1 --stats " +
+                                 dir + "/stats.json -q",
                              &output);
   ASSERT_EQ(code, 0) << output;
   const std::string stats = test::readFile(dir + "/stats.json");
@@ -272,9 +273,10 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   // A live device never ends by itself: stop it with SIGINT once the folder has
   // played.
   setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
-  test::Process map({test::binary(), "--source", "openni2:" + uri, "--out", dir + "/map.pcd",
-                     "--stats", dir + "/stats.json", "--no-render", "-q"},
-                    dir + "/map.log");
+  test::Process map(
+      {test::binary(), "--source", "openni2:" + uri, "--out", dir + "/map.pcd", "--stats",
+       dir + "/stats.json", "--set", "keyframe.policy=interval", "--no-render", "-q"},
+      dir + "/map.log");
   unsetenv("LD_LIBRARY_PATH");
   std::this_thread::sleep_for(std::chrono::seconds(6));
   map.signal(SIGINT);
