@@ -5,6 +5,10 @@
 #   synth  a synthetic room with exact geometry (`rgbdmap synth`): the same three, plus F-score
 #          at 1 cm and mean distance from `rgbdmap evaluate map`
 #   long   a longer synthetic replay (~700 frames), mainly for peak memory
+# and a tracking table (no ground truth used): fr1/xyz, fr1/rpy and the synthetic room tracked
+# by rgbdmap end to end (pose.source=odometry, every frame in MAP_trajectory.txt) and, when
+# bench/track_sequence is built, by OpenCV's RgbdOdometry and RgbdICPOdometry frame to frame:
+# ATE, RPE, ms per frame, frames lost, and frames dropped replaying at the recorded rate.
 # Machines are shared and noisy, so each system is also given as a ratio to the original method
 # measured in the same invocation; absolute times mean little on their own.
 #
@@ -26,6 +30,7 @@ usage: bash bench/run.sh [options]
   --every N         keyframe interval of the original method and of "rgbdmap every Nth" (default 10)
   --micro           also run the Google Benchmark microbenchmarks and append their output
   --keep            keep the work folder (default: kept only when --work is given)
+  --no-tracking     skip the tracking table
 EOF
 }
 
@@ -38,6 +43,7 @@ long_frames=700
 every_n=10
 run_micro=0
 keep=0
+run_tracking=1
 while [ $# -gt 0 ]; do
   case "$1" in
     --frames) frames_limit="$2"; shift 2 ;;
@@ -49,6 +55,7 @@ while [ $# -gt 0 ]; do
     --every) every_n="$2"; shift 2 ;;
     --micro) run_micro=1; shift ;;
     --keep) keep=1; shift ;;
+    --no-tracking) run_tracking=0; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "run.sh: unknown option $1" >&2; usage >&2; exit 2 ;;
   esac
@@ -64,6 +71,7 @@ case "$out_file" in ''|/*) ;; *) out_file="$root/$out_file" ;; esac
 rgbdmap="$build_dir/rgbdmap"
 original="$build_dir/bench/original_method"
 micro="$build_dir/bench/micro_benchmarks"
+track_sequence="$build_dir/bench/track_sequence"
 for exe in "$rgbdmap" "$original"; do
   if [ ! -x "$exe" ]; then
     echo "run.sh: $exe not found; build first:" >&2
@@ -275,6 +283,80 @@ if [ "$have_synth" = 1 ]; then
   fi
 fi
 
+# --- (d) tracking: every frame, ground truth used only to score ------------------------------
+track_rows="$work_dir/track_rows.tsv"
+: >"$track_rows"
+cm() { awk -v m="$1" 'BEGIN { if (m == "") print "-"; else printf "%.2f", m * 100 }'; }
+
+# add_track_row SEQUENCE SYSTEM FRAMES ATE_CM RPE_CM RPE_DEG LOST MS_P50 MS_P95 DROPPED
+add_track_row() {
+  local IFS=$'\t'
+  echo "$*" >>"$track_rows"
+}
+
+track_scenario() {  # NAME FOLDER
+  local name="$1" seq="$2" base="$work_dir/track-$1"
+  echo "== tracking $name: rgbdmap, every frame (--rate max), then at the recorded rate" >&2
+  local ate="" rpe="" rpe_deg="" dropped="-"
+  if "$rgbdmap" --source "tum:$seq" --out "$base.pcd" --rate max -q --no-render \
+      --stats "$base.json" --set pose.source=odometry >"$base.log" 2>&1; then
+    if "$rgbdmap" evaluate trajectory --estimate "${base}_trajectory.txt" \
+        --groundtruth "$seq/groundtruth.txt" --json "$base-ate.json" >"$base-ate.log" 2>&1; then
+      ate=$(json_number "$base-ate.json" ate_rmse_m)
+      rpe=$(json_number "$base-ate.json" rpe_trans_rmse_m)
+      rpe_deg=$(json_number "$base-ate.json" rpe_rot_rmse_deg)
+    else
+      note "tracking $name: evaluate trajectory failed (see $base-ate.log)"
+    fi
+  else
+    note "tracking $name: rgbdmap failed (see $base.log)"
+    failures=$((failures + 1))
+  fi
+  # As a live camera: the replay keeps the recorded pace and drops what the mapper cannot take.
+  if "$rgbdmap" --source "tum:$seq" --out "$base-rate1.pcd" --rate 1 -q --no-render \
+      --stats "$base-rate1.json" --set pose.source=odometry >"$base-rate1.log" 2>&1; then
+    dropped="$(json_number "$base-rate1.json" frames_dropped)/$(json_number "$base-rate1.json" frames_captured)"
+  else
+    note "tracking $name: rgbdmap --rate 1 failed (see $base-rate1.log)"
+  fi
+  add_track_row "$name" "rgbdmap (end to end)" "$(json_number "$base.json" frames_processed)" \
+    "$(cm "$ate")" "$(cm "$rpe")" "$(dash "$rpe_deg")" "$(json_number "$base.json" frames_lost)" \
+    "$(json_number "$base.json" p50_ms pose)" "$(json_number "$base.json" p95_ms pose)" "$dropped"
+
+  if [ ! -x "$track_sequence" ]; then return; fi
+  echo "== tracking $name: OpenCV frame to frame (bench/track_sequence)" >&2
+  if ! "$track_sequence" --sequence "$seq" --methods opencv_rgbd,opencv_rgbd_icp \
+      --json "$base-opencv.json" >"$base-opencv.log" 2>&1; then
+    note "tracking $name: track_sequence failed (see $base-opencv.log)"
+    return
+  fi
+  local method label frames
+  frames=$(json_number "$base-opencv.json" frames)
+  for method in opencv_rgbd opencv_rgbd_icp; do
+    label="OpenCV RgbdOdometry f2f"
+    [ "$method" = opencv_rgbd_icp ] && label="OpenCV RgbdICPOdometry f2f"
+    add_track_row "$name" "$label" "$frames" \
+      "$(cm "$(json_number "$base-opencv.json" ate_rmse "$method")")" \
+      "$(cm "$(json_number "$base-opencv.json" rpe_translation_rmse "$method")")" \
+      "$(dash "$(json_number "$base-opencv.json" rpe_rotation_rmse "$method")")" \
+      "$(json_number "$base-opencv.json" lost "$method")" \
+      "$(json_number "$base-opencv.json" median_ms "$method")" \
+      "$(json_number "$base-opencv.json" p95_ms "$method")" "-"
+  done
+}
+
+if [ "$run_tracking" = 1 ]; then
+  xyz_seq="$data_dir/tum/rgbd_dataset_freiburg1_xyz"
+  if [ -n "$frames_limit" ]; then
+    cut_tum "$xyz_seq" "$work_dir/tum/${xyz_seq##*/}" "$frames_limit" && xyz_seq="$work_dir/tum/${xyz_seq##*/}"
+  fi
+  [ -f "$xyz_seq/rgb.txt" ] && track_scenario fr1/xyz "$xyz_seq"
+  track_scenario fr1/rpy "$tum_seq"
+  [ -f "$work_dir/synth/rgb.txt" ] && track_scenario synth "$work_dir/synth"
+  [ -x "$track_sequence" ] ||
+    note "tracking: no OpenCV rows: $track_sequence is not built"
+fi
+
 # --- the table --------------------------------------------------------------------------------
 load "at end"
 table="$work_dir/table.txt"
@@ -321,9 +403,45 @@ Ratios are against the original method in the same scenario of this invocation: 
 ratio, kf speed-up = original kf ms p50 / this kf ms p50, RSS x = peak RSS ratio.
 The machine load (uptime) before and after the run is in the notes: compare ratios, not times."
 
+track_table="$work_dir/track_table.txt"
+: >"$track_table"
+if [ -s "$track_rows" ]; then
+  awk -F '\t' '
+    { for (i = 1; i <= NF; ++i) cell[NR, i] = $i; n = NR }
+    END {
+      header = "sequence|tracker|frames|ATE cm|RPE cm/s|RPE deg/s|lost|ms p50|ms p95|dropped at --rate 1"
+      cols = split(header, h, "|")
+      for (c = 1; c <= cols; ++c) { cell[0, c] = h[c]; width[c] = length(h[c]) }
+      for (r = 1; r <= n; ++r) {
+        for (c = 8; c <= 9; ++c) if (cell[r, c] ~ /^[0-9.]+$/) cell[r, c] = sprintf("%.1f", cell[r, c])
+        if (cell[r, 6] ~ /^[0-9.]+$/) cell[r, 6] = sprintf("%.2f", cell[r, 6])
+        for (c = 1; c <= cols; ++c) {
+          if (cell[r, c] == "") cell[r, c] = "-"
+          if (length(cell[r, c]) > width[c]) width[c] = length(cell[r, c])
+        }
+      }
+      for (r = 0; r <= n; ++r) {
+        line = ""
+        for (c = 1; c <= cols; ++c) {
+          f = (c <= 2) ? "%-" width[c] "s" : "%" width[c] "s"
+          line = line (c > 1 ? "  " : "") sprintf(f, cell[r, c])
+        }
+        print line
+        if (r == 0) { rule = line; gsub(/./, "-", rule); print rule }
+      }
+    }' "$track_rows" >"$track_table"
+fi
+track_legend="Tracking: every frame of each sequence, ground truth used only to score. rgbdmap runs end to
+end (pose.source=odometry, fusion on, --rate max); ATE (after rigid alignment) and RPE over 1 s
+of MAP_trajectory.txt, which has every frame (a lost frame at its predicted pose); ms: tracking
+alone per frame (the stats' pose latency, decoding excluded); lost: frames tracking gave up on;
+dropped: frames dropped (of those read) replaying at the recorded rate (--rate 1), as a live
+camera. OpenCV rows: bench/track_sequence, frame to frame, same frames, same invocation."
+
 cat "$table"
 echo
 echo "$legend"
+if [ -s "$track_table" ]; then echo; cat "$track_table"; echo; echo "$track_legend"; fi
 if [ -s "$notes" ]; then echo; cat "$notes"; fi
 
 micro_out=""
@@ -353,6 +471,9 @@ if [ -n "$out_file" ]; then
     echo '```'
     echo
     echo "$legend"
+    if [ -s "$track_table" ]; then
+      echo; echo "## Tracking"; echo; echo '```'; cat "$track_table"; echo '```'; echo; echo "$track_legend"
+    fi
     if [ -s "$notes" ]; then echo; echo "Notes:"; echo; sed 's/^/- /' "$notes"; fi
     if [ -n "$micro_out" ]; then
       echo; echo "## Microbenchmarks"; echo

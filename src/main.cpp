@@ -71,6 +71,8 @@ class SignalThread {
       } else if (sig == SIGINT || sig == SIGTERM) {
         if (control_.stop.exchange(true) && sig == SIGINT) {
           std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
+          for (const char* trajectory : {"_keyframes.txt.tmp", "_trajectory.txt.tmp"})
+            std::remove((stem(map_path_) + trajectory).c_str());
           std::fputs("\nsecond interrupt: quitting without the final save\n", stderr);
           std::_Exit(130);
         }

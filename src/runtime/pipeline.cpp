@@ -170,8 +170,8 @@ int Pipeline::run(RunControl& control) {
     });
   };
 
-  std::atomic<bool> mapping_done{false};
-  std::thread mapping([&] {
+  std::atomic<bool> tracking_done{false};
+  std::thread tracking([&] {
     double last_checkpoint = now();
     std::uint64_t keyframes_at_checkpoint = 0;
     bool finished = false;
@@ -211,14 +211,14 @@ int Pipeline::run(RunControl& control) {
     }
     // A snapshot request that came while the queue was draining is served by the final save.
     control.snapshot.store(false);
-    mapping_done.store(true);
+    tracking_done.store(true);
   });
 
-  // Status until the mapping thread has drained everything.
+  // Status until the tracking thread has taken every frame.
   const bool tty = outputs_.status_line && ::isatty(STDERR_FILENO);
   double last_print = 0;
   bool stop_announced = false;
-  while (!mapping_done.load()) {
+  while (!tracking_done.load()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     stats_.queue_depth.store(queue.depth());
     if (control.stop.load() && !stop_announced) {
@@ -236,7 +236,7 @@ int Pipeline::run(RunControl& control) {
     }
   }
   capture.join();
-  mapping.join();
+  tracking.join();
   if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());
   fusion.finish();
   stats_.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
