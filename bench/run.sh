@@ -294,8 +294,8 @@ add_track_row() {
   echo "$*" >>"$track_rows"
 }
 
-track_scenario() {  # NAME FOLDER
-  local name="$1" seq="$2" base="$work_dir/track-$1"
+track_scenario() {  # ID NAME FOLDER
+  local name="$2" seq="$3" base="$work_dir/track-$1"
   echo "== tracking $name: rgbdmap, every frame (--rate max), then at the recorded rate" >&2
   local ate="" rpe="" rpe_deg="" dropped="-"
   if "$rgbdmap" --source "tum:$seq" --out "$base.pcd" --rate max -q --no-render \
@@ -350,9 +350,9 @@ if [ "$run_tracking" = 1 ]; then
   if [ -n "$frames_limit" ]; then
     cut_tum "$xyz_seq" "$work_dir/tum/${xyz_seq##*/}" "$frames_limit" && xyz_seq="$work_dir/tum/${xyz_seq##*/}"
   fi
-  [ -f "$xyz_seq/rgb.txt" ] && track_scenario fr1/xyz "$xyz_seq"
-  track_scenario fr1/rpy "$tum_seq"
-  [ -f "$work_dir/synth/rgb.txt" ] && track_scenario synth "$work_dir/synth"
+  [ -f "$xyz_seq/rgb.txt" ] && track_scenario xyz fr1/xyz "$xyz_seq"
+  track_scenario rpy fr1/rpy "$tum_seq"
+  [ -f "$work_dir/synth/rgb.txt" ] && track_scenario synth synth "$work_dir/synth"
   [ -x "$track_sequence" ] ||
     note "tracking: no OpenCV rows: $track_sequence is not built"
 fi
