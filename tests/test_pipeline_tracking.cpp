@@ -140,6 +140,42 @@ TEST(PipelineTracking, LostFramesKeepTheirPredictedPoseAndAreNotMapped) {
       32.0 - lost);
 }
 
+// Every entry of a TUM list (rgb.txt, depth.txt) points at its first image: a camera that stands
+// still (each frame keeps its own stamp).
+void freezeList(const std::string& path) {
+  std::ifstream in(path);
+  std::string text, line, first;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#') {
+      const std::string file = line.substr(line.find(' ') + 1);
+      if (first.empty()) first = file;
+      line = line.substr(0, line.find(' ')) + " " + first;
+    }
+    text += line + "\n";
+  }
+  in.close();
+  std::ofstream(path) << text;
+}
+
+TEST(PipelineTracking, ATrackedCameraStandingStillAddsNoKeyframeByDefault) {
+  const std::string dir = test::freshDir();
+  const std::string copy = test::copySequence(test::tumDir(kXyz), dir + "/still");
+  freezeList(copy + "/rgb.txt");
+  freezeList(copy + "/depth.txt");
+  // Default keyframing with odometry (what a live camera gets): motion, one keyframe.
+  fs::create_directories(dir + "/motion");
+  const MapRun still = mapFolder(copy, dir + "/motion", "--set pose.source=odometry");
+  ASSERT_EQ(still.exit_code, 0) << still.output;
+  EXPECT_EQ(test::jsonNumber(still.stats, "frames_tracked"), 32.0) << still.stats;
+  EXPECT_EQ(test::jsonNumber(still.stats, "keyframes"), 1.0) << still.stats;
+  // The interval policy would fuse the same view again every 10 frames.
+  fs::create_directories(dir + "/interval");
+  const MapRun interval = mapFolder(copy, dir + "/interval",
+                                    "--set pose.source=odometry --set keyframe.policy=interval");
+  ASSERT_EQ(interval.exit_code, 0) << interval.output;
+  EXPECT_EQ(test::jsonNumber(interval.stats, "keyframes"), 4.0) << interval.stats;
+}
+
 TEST(PipelineTracking, CheckpointsCarryThePerFrameTrajectory) {
   const std::string dir = test::freshDir();
   // Half speed (100 frames in ~6.6 s); a checkpoint every 3 keyframes (every 10th frame with
