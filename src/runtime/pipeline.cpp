@@ -21,8 +21,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Keyframes that may wait for fusion. A few absorb a burst (a fast turn) while fusion catches
-// up; more would only let the map lag further behind tracking (each slot holds a 640x480 frame).
+// Keyframes that may wait for fusion (the pool holds two more: one being fused, one spare). A few
+// absorb a burst (a fast turn) while fusion catches up; more would only let the map lag further
+// behind tracking (each slot holds a 640x480 frame).
 constexpr std::size_t kFusionSlots = 4;
 
 double now() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
