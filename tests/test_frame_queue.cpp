@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <thread>
+#include <vector>
 
 #include "rgbdmap/runtime/frame_queue.hpp"
 
@@ -34,6 +35,22 @@ TEST(FrameQueue, BlockingModeIsLosslessAndOrdered) {
   producer.join();
   EXPECT_EQ(expected, kFrames);
   EXPECT_EQ(queue.dropped(), 0u);
+}
+
+TEST(FrameQueue, TryAcquireNeverWaits) {
+  // capacity 1 in blocking mode: a pool of 3 frames.
+  FrameQueue queue(1, QueuePolicy::kBlock, 8, 6);
+  std::vector<Frame*> taken;
+  for (int i = 0; i < 3; ++i) {
+    taken.push_back(queue.tryAcquire());
+    ASSERT_NE(taken.back(), nullptr) << i;
+  }
+  EXPECT_EQ(queue.tryAcquire(), nullptr);  // all in use: at once, no wait
+  queue.release(taken.back());
+  EXPECT_EQ(queue.tryAcquire(), taken.back());
+  queue.release(taken.front());
+  queue.close();
+  EXPECT_EQ(queue.tryAcquire(), nullptr);  // closed
 }
 
 TEST(FrameQueue, DropOldestKeepsTheNewestQueuedFrames) {
