@@ -17,6 +17,7 @@
 #include "rgbdmap/mapping/depth_filter.hpp"
 #include "rgbdmap/mapping/depth_smoother.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
+#include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
 namespace {
@@ -153,34 +154,55 @@ void BM_BackProject(benchmark::State& state) {
 }
 BENCHMARK(BM_BackProject)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
-// Fusing one frame's points into an empty map: every voxel is new (the first keyframe).
-void BM_VoxelIntegrateIntoEmptyMap(benchmark::State& state) {
+rgbdmap::TsdfIntegrator tsdfFor(const rgbdmap::Config& config) {
+  rgbdmap::TsdfIntegrator t;
+  t.camera = config.camera;
+  t.truncation = config.map_truncation;
+  t.truncation_sigmas = config.map_truncation_sigmas;
+  return t;
+}
+
+// Fusing one filtered frame along its lines of sight into an empty map: every block is new
+// (the first keyframe).
+void BM_TsdfIntegrateIntoEmptyMap(benchmark::State& state) {
   Fixture& f = fixture();
-  std::size_t voxels = 0;
+  const rgbdmap::TsdfIntegrator tsdf = tsdfFor(f.config);
+  std::size_t blocks = 0;
   for (auto _ : state) {
     rgbdmap::VoxelMap map(f.config.voxel_size);
-    map.integrate(f.points);
-    voxels = map.size();
-    benchmark::DoNotOptimize(voxels);
+    tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map);
+    blocks = map.blockCount();
+    benchmark::DoNotOptimize(blocks);
   }
-  state.counters["points"] = static_cast<double>(f.points.size());
-  state.counters["voxels"] = static_cast<double>(voxels);
+  state.counters["blocks"] = static_cast<double>(blocks);
 }
-BENCHMARK(BM_VoxelIntegrateIntoEmptyMap)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TsdfIntegrateIntoEmptyMap)->Unit(benchmark::kMillisecond);
 
-// Fusing one frame's points into a map that already holds the scene (every 10th frame of the
-// sequence): mostly updates of existing voxels in a large, cache-cold table.
-void BM_VoxelIntegrateIntoSceneMap(benchmark::State& state) {
+// The same into a map that already holds the scene (every 10th frame of the sequence): mostly
+// updates of existing blocks.
+void BM_TsdfIntegrateIntoSceneMap(benchmark::State& state) {
   Fixture& f = fixture();
+  const rgbdmap::TsdfIntegrator tsdf = tsdfFor(f.config);
   rgbdmap::VoxelMap map = *f.scene;
   for (auto _ : state) {
-    map.integrate(f.points);
+    tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map);
     benchmark::ClobberMemory();
   }
-  state.counters["points"] = static_cast<double>(f.points.size());
-  state.counters["map_voxels"] = static_cast<double>(map.size());
+  state.counters["map_blocks"] = static_cast<double>(map.blockCount());
 }
-BENCHMARK(BM_VoxelIntegrateIntoSceneMap)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TsdfIntegrateIntoSceneMap)->Unit(benchmark::kMillisecond);
+
+// A snapshot of the scene map as a point cloud (what a checkpoint writes), on the fusion side.
+void BM_ExtractSnapshot(benchmark::State& state) {
+  Fixture& f = fixture();
+  pcl::PointCloud<pcl::PointXYZRGB> cloud;
+  for (auto _ : state) {
+    f.scene->extract(cloud);
+    benchmark::DoNotOptimize(cloud.points.data());
+  }
+  state.counters["points"] = static_cast<double>(cloud.size());
+}
+BENCHMARK(BM_ExtractSnapshot)->Unit(benchmark::kMillisecond);
 
 // The whole keyframe path (filter, smooth, project, fuse) into the scene map.
 void BM_KeyframeIntegrate(benchmark::State& state) {
@@ -192,7 +214,7 @@ void BM_KeyframeIntegrate(benchmark::State& state) {
     integrator.integrate(f.frame, map, *stats);
     benchmark::ClobberMemory();
   }
-  state.counters["map_voxels"] = static_cast<double>(map.size());
+  state.counters["map_blocks"] = static_cast<double>(map.blockCount());
 }
 BENCHMARK(BM_KeyframeIntegrate)->Unit(benchmark::kMillisecond);
 

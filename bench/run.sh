@@ -25,7 +25,7 @@ usage: bash bench/run.sh [options]
   --build DIR       build directory with rgbdmap and bench/original_method (default: build)
   --out FILE        also write the table (with the run's context) to FILE, e.g. bench/results.md
   --work DIR        where sequences, maps and JSON go (default: a new folder under $TMPDIR)
-  --synth-frames N  frames of the synthetic sequence (default: 300)
+  --synth-frames N  frames of the synthetic sequence (default: 300; a 6 x 5 x 3 m room)
   --long-frames N   frames of the long synthetic replay (default: 700; 0 skips it)
   --every N         keyframe interval of the original method and of "rgbdmap every Nth" (default 10)
   --micro           also run the Google Benchmark microbenchmarks and append their output
@@ -39,6 +39,8 @@ build_dir="build"
 out_file=""
 work_dir=""
 synth_frames=300
+# A room whose far walls are beyond filter.max_depth (4 m), where the depth noise is 2-3 voxels.
+synth_room="--room 6x5x3"
 long_frames=700
 every_n=10
 run_micro=0
@@ -231,10 +233,53 @@ run_rgbdmap() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
     ${quality} 0
 }
 
+# Open3D's ScalableTSDFVolume (bench/open3d_tsdf.py, Debian's python3-open3d) as a peer: the
+# same frames, the poses and intrinsics rgbdmap used (its keyframe file and map.yaml from the
+# every-frame run), voxel 1 cm, truncation 4 cm, the same maximum depth. Skipped when absent.
+python=/usr/bin/python3
+[ -x "$python" ] || python=python3
+have_open3d=0
+"$python" -c 'import open3d' >/dev/null 2>&1 && have_open3d=1
+[ "$have_open3d" = 1 ] || note "Open3D: skipped (no python3-open3d; apt-get install python3-open3d)"
+run_open3d() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
+  [ "$have_open3d" = 1 ] || return 0
+  local scenario="$1" seq="$2" n="$3" scene="$4" base="$work_dir/$1-open3d-every$3"
+  local poses="$work_dir/$1-rgbdmap-every1_keyframes.txt" yaml="$work_dir/$1-rgbdmap-every1.yaml"
+  local label="open3d every $n"
+  [ "$n" = 1 ] && label="open3d every frame"
+  echo "== $scenario: $label" >&2
+  if [ ! -f "$poses" ] || [ ! -f "$yaml" ]; then
+    note "$scenario: $label skipped: no poses from rgbdmap's every-frame run"
+    return 0
+  fi
+  yaml_value() { awk -v key="$1:" '$1 == key { print $2; exit }' "$yaml"; }
+  local t0 t1
+  t0=$(now)
+  # One OpenMP thread: on a shared machine Open3D's spinning threads lose most of their time.
+  if ! OMP_NUM_THREADS=1 "$python" "$root/bench/open3d_tsdf.py" "$seq" "$poses" "$base.pcd" \
+      --every "$n" --fx "$(yaml_value fx)" --fy "$(yaml_value fy)" --cx "$(yaml_value cx)" \
+      --cy "$(yaml_value cy)" --depth-scale "$(yaml_value depth_scale)" \
+      --max-depth "$(yaml_value max_depth)" >"$base.json" 2>"$base.log"; then
+    note "$scenario: $label failed (see $base.log)"
+    failures=$((failures + 1))
+    return 0
+  fi
+  t1=$(now)
+  local quality
+  quality=$(if [ -n "$scene" ]; then evaluate_map "$base.pcd" "$scene" "$base-eval.json"; else echo "- -"; fi)
+  add_row "$scenario" "$label" \
+    "$(json_number "$base.json" frames)" "$(json_number "$base.json" keyframes)" \
+    "$(elapsed "$t0" "$t1")" "$(json_number "$base.json" frames_per_second)" - - \
+    "$(json_number "$base.json" peak_rss_mb)" "$(json_number "$base.json" map_points)" \
+    ${quality} 0
+}
+
 run_scenario() {  # SCENARIO SEQUENCE EXACT_SCENE(or empty)
   run_original "$1" "$2" "$3"
   run_rgbdmap "$1" "$2" "$every_n" "$3"
   run_rgbdmap "$1" "$2" 1 "$3"
+  run_open3d "$1" "$2" 1 "$3"
+  run_open3d "$1" "$2" "$every_n" "$3"
 }
 
 # --- (a) TUM fr1/rpy, real frames -----------------------------------------------------------
@@ -264,7 +309,7 @@ make_synth() {  # DEST FRAMES
   echo "== generating a synthetic sequence of $2 frames" >&2
   local t0 t1
   t0=$(now)
-  if ! "$rgbdmap" synth --out "$1" --frames "$2" >"$1.log" 2>&1; then
+  if ! "$rgbdmap" synth --out "$1" --frames "$2" $synth_room >"$1.log" 2>&1; then
     note "rgbdmap synth --out $1 --frames $2 failed (see $1.log)"
     return 1
   fi
@@ -358,6 +403,10 @@ if [ "$run_tracking" = 1 ]; then
 fi
 
 # --- the table --------------------------------------------------------------------------------
+# rgbdmap's frames/s over Open3D's, every frame fused, per scenario of this invocation.
+awk -F '\t' '$2 == "rgbdmap every frame" { r[$1] = $6 } $2 == "open3d every frame" { o[$1] = $6 }
+  END { for (s in r) if ((s in o) && o[s] > 0) printf "%s: rgbdmap every frame at %.2fx the frames/s of Open3D every frame\n", s, r[s] / o[s] }' \
+  "$rows" >>"$notes"
 load "at end"
 table="$work_dir/table.txt"
 awk -F '\t' '

@@ -2,6 +2,7 @@
 // score the map against the exact geometry with `rgbdmap evaluate`. The thresholds sit a little
 // under what the mapper achieves (the measured numbers are printed and recorded as properties).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -15,7 +16,11 @@
 namespace rgbdmap {
 namespace {
 
-constexpr int kFrames = 150;
+// A room larger than the default (6 x 5 x 3 m): from the camera's circle the far walls are at
+// up to ~4.5 m, beyond filter.max_depth (4 m), where the Kinect's depth noise (2.6 cm at 4 m) is
+// well above the 1 cm voxel. 90 frames at 10 fps cover three quarters of a circle.
+constexpr int kFrames = 90;
+const std::string kLargeRoom = " --room 6x5x3 --fps 10 --frames " + std::to_string(kFrames);
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -23,35 +28,28 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 struct MappingResult {
   double precision, recall, f_score, mean_mm, median_mm, p95_mm;
+  long points;
 };
 
-// Generates the sequence, maps it with keyframe.every_n = every_n and scores the map.
-MappingResult synthMapEvaluate(const std::string& dir, int every_n) {
+// Maps the sequence in `sequence` with keyframe.every_n = every_n and scores the map.
+MappingResult mapAndEvaluate(const std::string& sequence, const std::string& out, int every_n) {
   std::string output;
-  auto start = std::chrono::steady_clock::now();
-  EXPECT_EQ(test::run(test::binary() + " synth --out " + dir + "/room --frames " +
-                          std::to_string(kFrames),
-                      &output),
-            0)
-      << output;
-  std::cout << "synth " << kFrames << " frames: " << secondsSince(start) << " s\n";
-
-  start = std::chrono::steady_clock::now();
-  EXPECT_EQ(test::run(test::binary() + " --source tum:" + dir + "/room --out " + dir +
-                          "/map.pcd --rate max --set keyframe.every_n=" + std::to_string(every_n) +
-                          " -q --no-render",
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(test::run(test::binary() + " --source tum:" + sequence + " --out " + out +
+                          ".pcd --rate max --set keyframe.every_n=" + std::to_string(every_n) +
+                          " -q --no-render --stats " + out + "_stats.json",
                       &output),
             0)
       << output;
   std::cout << "mapping, every_n=" << every_n << ": " << secondsSince(start) << " s\n";
 
-  EXPECT_EQ(test::run(test::binary() + " evaluate map " + dir + "/map.pcd --scene " + dir +
-                          "/room --tau 0.01 --json " + dir + "/score.json",
+  EXPECT_EQ(test::run(test::binary() + " evaluate map " + out + ".pcd --scene " + sequence +
+                          " --tau 0.01 --json " + out + "_score.json",
                       &output),
             0)
       << output;
   std::cout << output;
-  const std::string json = test::readFile(dir + "/score.json");
+  const std::string json = test::readFile(out + "_score.json");
   MappingResult r{};
   r.precision = test::jsonNumber(json, "precision");
   r.recall = test::jsonNumber(json, "recall");
@@ -59,6 +57,7 @@ MappingResult synthMapEvaluate(const std::string& dir, int every_n) {
   r.mean_mm = test::jsonNumber(json, "mean_distance_mm");
   r.median_mm = test::jsonNumber(json, "median_distance_mm");
   r.p95_mm = test::jsonNumber(json, "p95_distance_mm");
+  r.points = static_cast<long>(test::jsonNumber(test::readFile(out + "_stats.json"), "map_points"));
   const std::string prefix = "every_n_" + std::to_string(every_n) + "_";
   ::testing::Test::RecordProperty(prefix + "precision", std::to_string(r.precision));
   ::testing::Test::RecordProperty(prefix + "recall", std::to_string(r.recall));
@@ -67,105 +66,138 @@ MappingResult synthMapEvaluate(const std::string& dir, int every_n) {
   return r;
 }
 
-TEST(SyntheticMapping, EveryFrameMapsTheVisibleSurfaceWithinMillimetres) {
-  const std::string dir = test::freshDir();
-  const MappingResult r = synthMapEvaluate(dir, 1);
-  // Measured: P 1.000, R 0.998, F 0.999, mean 0.73 mm (issue 3 asks F >= 0.99, mean <= 2 mm).
-  EXPECT_LT(r.median_mm, 1.5);
-  EXPECT_LT(r.mean_mm, 1.5);
-  EXPECT_LT(r.p95_mm, 3.0);
-  EXPECT_GE(r.precision, 0.99);
-  EXPECT_GE(r.recall, 0.98);
-  EXPECT_GE(r.f_score, 0.985);
+// One large-room sequence for the tests below (generating it is most of their time). CTest
+// runs each test in its own process, so the sequence is generated once into a shared folder:
+// written under a private name, then renamed into place (the loser of a race discards its copy).
+class LargeRoom : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    namespace fs = std::filesystem;
+    const std::string shared = std::string(RGBDMAP_TEST_TMP) + "/LargeRoom";
+    fs::create_directories(shared);
+    if (!fs::exists(shared + "/room/visible_surface.pcd")) {
+      const std::string mine = shared + "/room." + std::to_string(::getpid());
+      std::string output;
+      const auto start = std::chrono::steady_clock::now();
+      ASSERT_EQ(test::run(test::binary() + " synth --out " + mine + kLargeRoom, &output), 0)
+          << output;
+      std::cout << "synth " << kFrames << " frames: " << secondsSince(start) << " s\n";
+      std::error_code ec;
+      fs::rename(mine, shared + "/room", ec);
+      if (ec) fs::remove_all(mine);
+    }
+    room_ = new std::string(shared + "/room");
+  }
+  static void TearDownTestSuite() {
+    delete room_;
+    room_ = nullptr;
+  }
+  void SetUp() override {
+    dir_ = test::freshDir();
+    std::filesystem::create_directory_symlink(*room_, dir_ + "/room");
+  }
+  static std::string* room_;
+  std::string dir_;
+};
+std::string* LargeRoom::room_ = nullptr;
+
+TEST_F(LargeRoom, MoreFramesMakeTheMapBetterNotThicker) {
+  // Issue 11: fusing every frame must not lose to fusing every 10th (with points averaged where
+  // they land it did: F 0.972 vs 0.993), and stays within millimetres of the exact surfaces.
+  const MappingResult every = mapAndEvaluate(dir_ + "/room", dir_ + "/every1", 1);
+  const MappingResult tenth = mapAndEvaluate(dir_ + "/room", dir_ + "/every10", 10);
+  // Measured: every frame P 1.000, R 0.994, F 0.997, mean 0.45 mm; every 10th (9 keyframes)
+  // P 1.000, R 0.85, F 0.92, mean 1.2 mm.
+  EXPECT_GE(every.f_score, 0.98);
+  EXPECT_GE(every.precision, 0.99);
+  EXPECT_LT(every.mean_mm, 2.0);
+  EXPECT_LT(every.p95_mm, 3.0);
+  EXPECT_GE(every.f_score, tenth.f_score);
+  EXPECT_GE(tenth.f_score, 0.9);
+  EXPECT_LT(tenth.mean_mm, 2.0);
+  // Every frame adds what the 10th frames never saw (measured 1.21x the points), but no layers
+  // of noise (points averaged where they landed: ~3x).
+  EXPECT_LE(every.points, tenth.points * 7 / 5);
 
   // The keyframe poses written beside the map are the interpolated ground truth; TUM's ATE
   // pairs them with the nearest 100 Hz sample (no interpolation), so a few millimetres remain.
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " evaluate trajectory --estimate " + dir +
-                          "/map_keyframes.txt --groundtruth " + dir +
-                          "/room/groundtruth.txt --json " + dir + "/trajectory.json",
+  ASSERT_EQ(test::run(test::binary() + " evaluate trajectory --estimate " + dir_ +
+                          "/every1_keyframes.txt --groundtruth " + dir_ +
+                          "/room/groundtruth.txt --json " + dir_ + "/trajectory.json",
                       &output),
             0)
       << output;
-  std::cout << output;
-  const std::string json = test::readFile(dir + "/trajectory.json");
+  const std::string json = test::readFile(dir_ + "/trajectory.json");
   EXPECT_EQ(test::jsonNumber(json, "ate_pairs"), kFrames);
   EXPECT_LT(test::jsonNumber(json, "ate_rmse_m"), 0.004);
-  EXPECT_LT(test::jsonNumber(json, "rpe_rot_rmse_deg"), 0.5);
 }
 
-TEST(SyntheticMapping, EveryTenthFrameStillCoversMostOfTheSurface) {
-  const std::string dir = test::freshDir();
-  const MappingResult r = synthMapEvaluate(dir, 10);
-  // Measured: P 1.000, R 0.952, F 0.976, mean 0.68 mm (issue 3 asks F >= 0.95).
-  EXPECT_LT(r.median_mm, 1.5);
-  EXPECT_LT(r.mean_mm, 1.5);
-  EXPECT_GE(r.precision, 0.99);
-  EXPECT_GE(r.recall, 0.92);
-  EXPECT_GE(r.f_score, 0.955);
-}
-
-// Writes `list` (a TUM list: comment lines, then "timestamp rest") to `out` twice: as it is, then
-// with every timestamp moved `shift` seconds later, so the same frames are read a second time.
-void writeTwice(const std::string& list, const std::string& out, double shift) {
-  std::ifstream in(list);
-  std::ofstream twice(out);
-  std::string line, comments, entries, shifted;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') {
-      comments += line + "\n";
-      continue;
+// Writes the TUM list `name` of `first` and then of `second` (every timestamp `shift` seconds
+// later, file names prefixed with the folder's name) to `out`: one sequence that goes over the
+// same path twice, with the images of two recordings.
+void writeTwoPasses(const std::string& root, const std::string& first, const std::string& second,
+                    const std::string& name, const std::string& out_dir, double shift) {
+  std::ofstream twice(out_dir + "/" + name);
+  const bool images = name != "groundtruth.txt";
+  int pass = 0;
+  for (const std::string& folder : {first, second}) {
+    std::ifstream in(root + "/" + folder + "/" + name);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') {
+        if (pass == 0) twice << line << "\n";
+        continue;
+      }
+      std::istringstream fields(line);
+      double stamp = 0;
+      std::string rest;
+      fields >> stamp;
+      std::getline(fields, rest);
+      if (images) rest = " " + folder + "/" + rest.substr(rest.find_first_not_of(' '));
+      char moved[64];
+      std::snprintf(moved, sizeof moved, "%.6f", stamp + pass * shift);
+      twice << moved << rest << "\n";
     }
-    std::istringstream fields(line);
-    double stamp = 0;
-    std::string rest;
-    fields >> stamp;
-    std::getline(fields, rest);
-    char moved[64];
-    std::snprintf(moved, sizeof moved, "%.6f", stamp + shift);
-    entries += line + "\n";
-    shifted += moved + rest + "\n";
+    ++pass;
   }
-  twice << comments << entries << shifted;
 }
 
-long mapPoints(const std::string& stats_json) {
-  return static_cast<long>(test::jsonNumber(test::readFile(stats_json), "map_points"));
-}
-
-TEST(SyntheticMapping, ASecondPassOverTheSameFramesDoesNotGrowTheMap) {
-  // Issue 3, target 5: revisiting what is mapped adds no points. The same frames (same images,
-  // same poses, 1000 s later) are replayed after themselves; the map must keep its size.
-  const std::string dir = test::freshDir();
+TEST_F(LargeRoom, ASecondPassWithFreshNoiseDoesNotGrowTheMap) {
+  // Issue 11: revisiting a mapped area with fresh sensor noise adds at most 2% points. The same
+  // path is rendered again with another noise seed and replayed after the first pass.
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " synth --frames 40 --out " + dir + "/once", &output), 0)
+  ASSERT_EQ(
+      test::run(test::binary() + " synth --out " + dir_ + "/fresh --noise-seed 77" + kLargeRoom,
+                &output),
+      0)
       << output;
   namespace fs = std::filesystem;
-  fs::create_directory(dir + "/twice");
-  for (const char* folder : {"rgb", "depth"})
-    fs::create_directory_symlink(fs::absolute(dir + "/once/" + folder), dir + "/twice/" + folder);
+  const std::string twice = dir_ + "/twice";
+  fs::create_directory(twice);
+  for (const char* folder : {"room", "fresh"})
+    fs::create_directory_symlink(fs::absolute(dir_ + "/" + folder), twice + "/" + folder);
   for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"})
-    writeTwice(dir + "/once/" + list, dir + "/twice/" + list, 1000.0);
+    writeTwoPasses(dir_, "room", "fresh", list, twice, 1000.0);
+  fs::copy_file(dir_ + "/room/scene.yaml", twice + "/scene.yaml");
+  fs::copy_file(dir_ + "/room/visible_surface.pcd", twice + "/visible_surface.pcd");
 
-  for (const int every_n : {1, 5}) {
-    long points[2] = {0, 0};
-    int i = 0;
-    for (const char* sequence : {"once", "twice"}) {
-      const std::string stats = dir + "/" + sequence + ".json";
-      ASSERT_EQ(test::run(test::binary() + " --source tum:" + dir + "/" + sequence + " --out " +
-                              dir + "/" + sequence + ".pcd --rate max -q --no-render --stats " +
-                              stats + " --set keyframe.every_n=" + std::to_string(every_n),
-                          &output),
-                0)
-          << output;
-      EXPECT_EQ(test::jsonNumber(test::readFile(stats), "keyframes"), (i + 1) * 40 / every_n);
-      points[i++] = mapPoints(stats);
-    }
-    std::cout << "every " << every_n << ": " << points[0] << " points after one pass, " << points[1]
-              << " after two\n";
-    EXPECT_GT(points[0], 100000);
-    EXPECT_LE(std::abs(points[1] - points[0]), 10) << "every_n=" << every_n;
-  }
+  const MappingResult once = mapAndEvaluate(dir_ + "/room", dir_ + "/once", 1);
+  const MappingResult two = mapAndEvaluate(twice, dir_ + "/two", 1);
+  std::cout << once.points << " points after one pass, " << two.points << " after two\n";
+  EXPECT_EQ(test::jsonNumber(test::readFile(dir_ + "/two_stats.json"), "keyframes"), 2 * kFrames);
+  EXPECT_GT(once.points, 100000);
+  EXPECT_LE(two.points, once.points + once.points / 50);
+  EXPECT_GE(two.f_score, once.f_score - 0.002);
+}
+
+TEST(SyntheticMapping, SynthRefusesARoomSizeItCannotFurnish) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  EXPECT_NE(
+      test::run(test::binary() + " synth --frames 2 --out " + dir + "/room --room 6x2x3", &output),
+      0);
+  EXPECT_NE(output.find("--room"), std::string::npos) << output;
 }
 
 TEST(SyntheticMapping, NoiseFreeDepthGivesAnAlmostExactMap) {

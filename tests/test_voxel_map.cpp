@@ -1,22 +1,56 @@
+// The TSDF voxel map and its projective integration on images of exact planes.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <set>
 
+#include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
 
 namespace rgbdmap {
 namespace {
 
-PointBatch batchOf(const std::vector<Eigen::Vector3f>& points, float weight = 1.0f) {
-  PointBatch b;
-  for (const auto& p : points) {
-    b.positions.push_back(p);
-    b.colors.emplace_back(100, 150, 200);
-    b.weights.push_back(weight);
-  }
-  return b;
+CameraIntrinsics smallCamera() {
+  CameraIntrinsics c;
+  c.width = 160;
+  c.height = 120;
+  c.fx = c.fy = 150.0;
+  c.cx = 79.5;
+  c.cy = 59.5;
+  return c;
+}
+
+// Depth image of the plane z = distance + slope * x (camera frame), with Gaussian noise of
+// `sigma` metres drawn from `seed` (0: exact).
+cv::Mat planeDepth(const CameraIntrinsics& c, double distance, double slope, double sigma,
+                   unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.0f, static_cast<float>(sigma));
+  cv::Mat depth(c.height, c.width, CV_32FC1);
+  for (int v = 0; v < c.height; ++v)
+    for (int u = 0; u < c.width; ++u) {
+      const double z = distance / (1.0 - slope * (u - c.cx) / c.fx);
+      depth.at<float>(v, u) = static_cast<float>(z) + (sigma > 0 ? noise(rng) : 0.0f);
+    }
+  return depth;
+}
+
+cv::Mat grey(const CameraIntrinsics& c) {
+  return cv::Mat(c.height, c.width, CV_8UC3, cv::Scalar(90, 120, 150));
+}
+
+TsdfIntegrator integratorFor(const CameraIntrinsics& c) {
+  TsdfIntegrator t;
+  t.camera = c;
+  return t;
+}
+
+MapCloud extractOf(const VoxelMap& map) {
+  MapCloud cloud;
+  map.extract(cloud);
+  return cloud;
 }
 
 TEST(VoxelMap, KeysRoundTripIncludingNegativeCoordinates) {
@@ -35,114 +69,93 @@ TEST(VoxelMap, KeysRoundTripIncludingNegativeCoordinates) {
   EXPECT_FALSE(map.keyFor(Eigen::Vector3f(std::nanf(""), 0, 0), key));
 }
 
-TEST(VoxelMap, WeightedMeanOfPositionAndColour) {
-  VoxelMap map(0.1);
-  PointBatch b;
-  b.positions = {{0.01f, 0.02f, 0.03f}, {0.05f, 0.06f, 0.07f}};
-  b.colors = {{0, 0, 0}, {200, 100, 50}};
-  b.weights = {1.0f, 3.0f};
-  map.integrate(b);
-  ASSERT_EQ(map.size(), 1u);
-  const auto& v = map.voxels().front();
-  EXPECT_NEAR(v.position.x(), (0.01f + 3 * 0.05f) / 4, 1e-6);
-  EXPECT_NEAR(v.position.z(), (0.03f + 3 * 0.07f) / 4, 1e-6);
-  EXPECT_NEAR(v.color.x(), 150.0f, 1e-4);
-  EXPECT_FLOAT_EQ(v.weight, 4.0f);
-  EXPECT_EQ(v.observations, 2u);
-}
-
-TEST(VoxelMap, OnePointPerVoxelAndRevisitsDoNotGrow) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<Eigen::Vector3f> points;
-  for (int i = 0; i < 50000; ++i) points.emplace_back(u(rng), u(rng), 0.3f * u(rng));
-  VoxelMap map(0.02);
-  map.integrate(batchOf(points));
-  const std::size_t size = map.size();
-  map.integrate(batchOf(points));
-  EXPECT_EQ(map.size(), size);
-  MapCloud cloud;
-  map.extract(cloud);
-  ASSERT_EQ(cloud.size(), size);
-  std::set<std::uint64_t> keys;
-  for (const auto& p : cloud) {
-    std::uint64_t key;
-    ASSERT_TRUE(map.keyFor(p.getVector3fMap(), key));
-    EXPECT_TRUE(keys.insert(key).second);
-  }
-}
-
-TEST(VoxelMap, SceneLargerThanPclVoxelGridLimit) {
-  // A 30 m x 30 m floor and a point 25 m up, at 5 mm voxels: 6000 x 5000 x 6000 cells, far past
-  // the 2^31 PCL's VoxelGrid can index (it would return its input unfiltered). Every sample lies
-  // in its own voxel, so the map must keep every one, once.
-  VoxelMap map(0.005);
-  std::vector<Eigen::Vector3f> points;
-  const int n = 600;  // 600 x 600 samples 5 cm apart
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      points.emplace_back(-15.0f + 0.05f * i + 0.0025f, 0.0025f, -15.0f + 0.05f * j + 0.0025f);
-  points.emplace_back(0.0025f, 25.0025f, 0.0025f);  // a 25 m tall outlier stretches the extent
-  map.integrate(batchOf(points));
-  EXPECT_EQ(map.size(), points.size());
-  MapCloud cloud;
-  map.extract(cloud);
-  EXPECT_EQ(cloud.size(), points.size());
-  EXPECT_EQ(map.rejectedPoints(), 0u);
-}
-
-TEST(VoxelMap, MinObservationsFiltersExtraction) {
-  VoxelMap map(0.1);
-  map.integrate(batchOf({{0.01f, 0.01f, 0.01f}, {0.02f, 0.02f, 0.02f}, {1.05f, 1.05f, 1.05f}}));
-  MapCloud cloud;
-  map.extract(cloud, 2);
-  EXPECT_EQ(cloud.size(), 1u);
-}
-
-TEST(VoxelMap, PointCountIsWhatExtractWrites) {
-  VoxelMap map(0.1, 2);
-  map.integrate(batchOf({{0.01f, 0.01f, 0.01f}, {0.02f, 0.02f, 0.02f}, {1.05f, 1.05f, 1.05f}}));
-  EXPECT_EQ(map.size(), 2u);
-  EXPECT_EQ(map.pointCount(), 1u);
-  MapCloud cloud;
-  map.extract(cloud);
+TEST(VoxelMap, AnExactPlaneGivesOneLayerOfPointsOnThePlane) {
+  const CameraIntrinsics c = smallCamera();
+  VoxelMap map(0.01);
+  integratorFor(c).integrate(planeDepth(c, 2.0, 0.0, 0.0, 0), grey(c),
+                             Eigen::Isometry3d::Identity(), map);
+  const MapCloud cloud = extractOf(map);
+  ASSERT_GT(cloud.size(), 1000u);
   EXPECT_EQ(cloud.size(), map.pointCount());
-  map.integrate(batchOf({{1.06f, 1.06f, 1.06f}}));  // the second voxel's second point
-  EXPECT_EQ(map.pointCount(), 2u);
+  std::set<std::pair<int, int>> columns;
+  for (const auto& p : cloud) {
+    EXPECT_NEAR(p.z, 2.0, 0.001);
+    EXPECT_TRUE(columns
+                    .insert({static_cast<int>(std::floor(p.x / 0.01)),
+                             static_cast<int>(std::floor(p.y / 0.01))})
+                    .second)
+        << "two points over one voxel column at " << p;
+    EXPECT_EQ(p.r, 150);
+    EXPECT_EQ(p.b, 90);
+  }
 }
 
-TEST(VoxelMap, SameBatchesGiveTheSameCloudAcrossBlockBorders) {
-  // Points on a slanted plane crossing many 8x8x8 blocks, both signs of every axis: each voxel
-  // gets its own running mean, and extraction is deterministic (creation order).
-  std::vector<Eigen::Vector3f> points;
-  for (int i = -300; i < 300; ++i)
-    for (int j = -300; j < 300; j += 3)
-      points.emplace_back(0.0011f * i, 0.0013f * j, 0.3f * 0.0011f * i - 0.2f * 0.0013f * j);
-  VoxelMap a(0.01), b(0.01);
-  for (int pass = 0; pass < 2; ++pass) {
-    a.integrate(batchOf(points));
-    b.integrate(batchOf(points));
+TEST(VoxelMap, NoisyViewsOfAFarPlaneConvergeInsteadOfThickening) {
+  // At 3.5 m the depth noise (2 cm) is twice the voxel: points averaged where they land would
+  // spread over several voxels; along the line of sight the views average into one layer.
+  const CameraIntrinsics c = smallCamera();
+  const double sigma = 0.0012 + 0.0019 * (3.5 - 0.4) * (3.5 - 0.4);
+  VoxelMap map(0.01);
+  const TsdfIntegrator tsdf = integratorFor(c);
+  std::size_t after_first = 0;
+  for (unsigned frame = 1; frame <= 12; ++frame) {
+    tsdf.integrate(planeDepth(c, 3.5, 0.3, sigma, frame), grey(c), Eigen::Isometry3d::Identity(),
+                   map);
+    if (frame == 1) after_first = map.pointCount();
   }
-  MapCloud ca, cb;
-  a.extract(ca);
-  b.extract(cb);
+  const MapCloud cloud = extractOf(map);
+  EXPECT_EQ(cloud.size(), map.pointCount());
+  EXPECT_LE(cloud.size(), after_first + after_first / 50) << "more views made the map thicker";
+  double sum = 0.0;
+  for (const auto& p : cloud) {
+    const double plane_z = 3.5 + 0.3 * p.x;  // the plane z = 3.5 + 0.3 x
+    sum += std::abs(p.z - plane_z);
+  }
+  const double mean = sum / static_cast<double>(cloud.size());
+  std::cout << cloud.size() << " points (" << after_first << " after one view), mean |dz| "
+            << mean * 1000 << " mm\n";
+  EXPECT_LT(mean, 0.004);
+}
+
+TEST(VoxelMap, PointCountIsWhatExtractWritesAcrossBlockBorders) {
+  // A tilted plane through the origin crosses blocks with negative and positive coordinates.
+  const CameraIntrinsics c = smallCamera();
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(-0.03, 0.02, -1.0);
+  VoxelMap a(0.01), b(0.01);
+  const TsdfIntegrator tsdf = integratorFor(c);
+  for (unsigned frame = 1; frame <= 4; ++frame) {
+    const cv::Mat depth = planeDepth(c, 1.0, -0.5, 0.002, frame);
+    tsdf.integrate(depth, grey(c), pose, a);
+    tsdf.integrate(depth, grey(c), pose, b);
+    EXPECT_EQ(a.pointCount(), extractOf(a).size());
+  }
+  // The same frames give the same cloud, point for point.
+  const MapCloud ca = extractOf(a), cb = extractOf(b);
   ASSERT_EQ(ca.size(), cb.size());
   for (std::size_t i = 0; i < ca.size(); ++i)
     EXPECT_EQ(ca[i].getVector3fMap(), cb[i].getVector3fMap());
-  // One voxel per distinct key of the input, and each mean lies in its own voxel (a point per key).
-  std::set<std::uint64_t> input_keys, output_keys;
-  for (const auto& p : points) {
-    std::uint64_t key;
-    ASSERT_TRUE(a.keyFor(p, key));
-    input_keys.insert(key);
-  }
-  for (const auto& p : ca) {
-    std::uint64_t key;
-    ASSERT_TRUE(a.keyFor(p.getVector3fMap(), key));
-    output_keys.insert(key);
-  }
-  EXPECT_EQ(a.size(), input_keys.size());
-  EXPECT_EQ(output_keys, input_keys);
+}
+
+TEST(VoxelMap, MinObservationsLeavesOutVoxelsSeenOnce) {
+  const CameraIntrinsics c = smallCamera();
+  VoxelMap once(0.01, 2);
+  const TsdfIntegrator tsdf = integratorFor(c);
+  tsdf.integrate(planeDepth(c, 2.0, 0.0, 0.0, 0), grey(c), Eigen::Isometry3d::Identity(), once);
+  EXPECT_EQ(once.pointCount(), 0u);
+  EXPECT_TRUE(extractOf(once).empty());
+  tsdf.integrate(planeDepth(c, 2.0, 0.0, 0.0, 0), grey(c), Eigen::Isometry3d::Identity(), once);
+  EXPECT_GT(once.pointCount(), 1000u);
+}
+
+TEST(VoxelMap, MissingDepthAllocatesNothing) {
+  const CameraIntrinsics c = smallCamera();
+  VoxelMap map(0.01);
+  cv::Mat depth(c.height, c.width, CV_32FC1, cv::Scalar(0.0f));
+  depth.at<float>(10, 10) = std::nanf("");
+  integratorFor(c).integrate(depth, grey(c), Eigen::Isometry3d::Identity(), map);
+  EXPECT_EQ(map.blockCount(), 0u);
+  EXPECT_EQ(map.pointCount(), 0u);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // score without a camera or a download.
 #include <cstdio>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "rgbdmap/sim/synthetic_scene.hpp"
@@ -9,6 +10,21 @@
 #include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
+namespace {
+
+// "6x5x3" -> (6, 5, 3); false unless the room has space for the furniture and a camera path.
+bool parseRoomSize(const std::string& text, Eigen::Vector3d& size) {
+  double x = 0, y = 0, z = 0;
+  char sep1 = 0, sep2 = 0;
+  std::istringstream in(text);
+  if (!(in >> x >> sep1 >> y >> sep2 >> z) || sep1 != 'x' || sep2 != 'x' || !in.eof())
+    return false;
+  if (!(x >= 3.0 && y >= 3.0 && z >= 2.0 && x <= 100.0 && y <= 100.0 && z <= 20.0)) return false;
+  size = Eigen::Vector3d(x, y, z);
+  return true;
+}
+
+}  // namespace
 
 void addSynthCommand(CLI::App& app, Command& selected) {
   auto* cmd = app.add_subcommand(
@@ -16,7 +32,7 @@ void addSynthCommand(CLI::App& app, Command& selected) {
       "write a synthetic RGB-D sequence (TUM layout) of a room with exact geometry: Kinect-like "
       "depth noise, ground truth, scene.yaml and visible_surface.pcd for `rgbdmap evaluate`");
   struct Options {
-    std::string out, scene;
+    std::string out, scene, room;
     bool no_noise = false;
     SyntheticSequenceOptions sequence;
   };
@@ -25,8 +41,22 @@ void addSynthCommand(CLI::App& app, Command& selected) {
   cmd->add_option("-n,--frames", o->sequence.frames, "number of frames")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
-  cmd->add_option("--seed", o->sequence.seed, "random seed (noise, path sway)")
+  cmd->add_option("--seed", o->sequence.seed, "random seed of the path's sway (and of the noise)")
       ->capture_default_str();
+  auto* noise_seed = cmd->add_option(
+      "--noise-seed", o->sequence.noise_seed,
+      "random seed of the sensor noise alone (default: --seed): the same path with fresh noise");
+  cmd->add_option("--room", o->room,
+                  "size of the built-in room, LENGTHxWIDTHxHEIGHT in metres (default 5x4x2.8; "
+                  "the furniture moves with the walls)")
+      ->check([](const std::string& text) -> std::string {
+        Eigen::Vector3d size;
+        return parseRoomSize(text, size) ? "" : "expected e.g. 6x5x3 (x, y >= 3 m, z >= 2 m)";
+      });
+  cmd->add_option("--path-radius", o->sequence.path_radius,
+                  "radius of the camera's circle in metres (default: 16% of the room's length, "
+                  "15% of its width)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_flag("--no-noise", o->no_noise,
                 "exact depth (only quantised to 1/depth_scale), no dropouts, no colour noise");
   cmd->add_option("--fps", o->sequence.fps, "frame rate (Hz)")
@@ -49,12 +79,15 @@ void addSynthCommand(CLI::App& app, Command& selected) {
   cmd->add_option("--png-compression", o->sequence.png_compression, "zlib level 0..9")
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
-  cmd->callback([o, &selected] {
-    selected = [o] {
+  cmd->callback([o, noise_seed, &selected] {
+    selected = [o, noise_seed] {
       SyntheticSequenceOptions options = o->sequence;
       options.noise = !o->no_noise;
+      if (noise_seed->count() == 0) options.noise_seed = options.seed;
+      Eigen::Vector3d size(5.0, 4.0, 2.8);
+      if (!o->room.empty()) parseRoomSize(o->room, size);
       const SyntheticScene scene =
-          o->scene.empty() ? SyntheticScene::defaultRoom() : SyntheticScene::load(o->scene);
+          o->scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o->scene);
       if (o->out.find("freiburg") != std::string::npos)
         std::fprintf(stderr,
                      "rgbdmap synth: warning: '%s' contains 'freiburg', so rgbdmap would pick a "

@@ -43,6 +43,7 @@ void BackProjector::project(const cv::Mat& depth, const cv::Mat& color_bgr,
       out.colors.emplace_back(c_row[u][2], c_row[u][1], c_row[u][0]);
       const float s = kinectDepthSigma(z) / sigma_at_1m;
       out.weights.push_back(1.0f / (s * s));
+      out.pixels.push_back(v * width_ + u);
     }
   }
 }

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace rgbdmap {
 namespace {
@@ -23,26 +25,33 @@ DepthFilter makeFilter(const Config& c) {
   return f;
 }
 
+TsdfIntegrator makeTsdf(const Config& c) {
+  TsdfIntegrator t;
+  t.camera = c.camera;
+  t.truncation = c.map_truncation;
+  t.truncation_sigmas = c.map_truncation_sigmas;
+  // Blocks are 8 voxels wide; a sample every 2nd pixel finds every block a surface crosses.
+  t.allocation_stride = c.subsample ? 2 : 1;
+  return t;
+}
+
 }  // namespace
 
 KeyframeIntegrator::KeyframeIntegrator(const Config& config)
     : filter_(makeFilter(config)),
       // Fusion averages many views of each surface, so unsmoothable pixels are dropped.
       smoother_{config.smooth_radius, config.edge_jump, 0.75, true},
-      projector_(config.camera, config.undistort),
+      tsdf_(makeTsdf(config)),
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
-      sor_stddev_(config.sor_stddev) {
-  if (config.subsample) {
-    // A pixel at depth z spans z / f metres; below this depth two of them fit in half a voxel.
-    const double f = std::min(config.camera.fx, config.camera.fy);
-    projector_.setSubsampleBelowDepth(static_cast<float>(config.voxel_size * f / 4.0));
-  }
-  const std::size_t pixels = static_cast<std::size_t>(config.camera.width) * config.camera.height;
-  for (PointBatch* b : {&batch_, &kept_}) {
-    b->positions.reserve(pixels);
-    b->colors.reserve(pixels);
-    b->weights.reserve(pixels);
+      sor_stddev_(config.sor_stddev),
+      undistort_(config.undistort && config.camera.hasDistortion()),
+      projector_(config.camera, config.undistort) {
+  if (undistort_) {
+    const cv::Size size(config.camera.width, config.camera.height);
+    cv::initUndistortRectifyMap(config.camera.cameraMatrix(), config.camera.distortion(),
+                                cv::Matx33d::eye(), config.camera.cameraMatrix(), size, CV_16SC2,
+                                undistort_map1_, undistort_map2_);
   }
 }
 
@@ -53,19 +62,29 @@ void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& 
   stats.filter_latency.record(secondsSince(start));
 
   const auto project_start = std::chrono::steady_clock::now();
-  batch_.clear();
-  projector_.project(depth_, frame.color, frame.pose, batch_);
-  if (statistical_) removeStatisticalOutliers();
+  if (statistical_) removeStatisticalOutliers(frame);
+  const cv::Mat* depth = &depth_;
+  const cv::Mat* color = &frame.color;
+  if (undistort_) {
+    // Nearest neighbour for depth: interpolating across an edge would invent surfaces.
+    cv::remap(depth_, pinhole_depth_, undistort_map1_, undistort_map2_, cv::INTER_NEAREST);
+    cv::remap(frame.color, pinhole_color_, undistort_map1_, undistort_map2_, cv::INTER_LINEAR);
+    depth = &pinhole_depth_;
+    color = &pinhole_color_;
+  }
   stats.project_latency.record(secondsSince(project_start));
 
   const auto fuse_start = std::chrono::steady_clock::now();
-  map.integrate(batch_);
+  tsdf_.integrate(*depth, *color, frame.pose, map);
   stats.fuse_latency.record(secondsSince(fuse_start));
   stats.integrate_latency.record(secondsSince(start));
 }
 
-void KeyframeIntegrator::removeStatisticalOutliers() {
-  // The original method's filter: PCL's k-d tree based statistical outlier removal.
+void KeyframeIntegrator::removeStatisticalOutliers(const Frame& frame) {
+  // The original method's filter: PCL's k-d tree based statistical outlier removal on the
+  // back-projected points; the pixels of the points it removes lose their depth.
+  batch_.clear();
+  projector_.project(depth_, frame.color, frame.pose, batch_);
   pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
   cloud->resize(batch_.size());
   for (std::size_t i = 0; i < batch_.size(); ++i)
@@ -76,13 +95,11 @@ void KeyframeIntegrator::removeStatisticalOutliers() {
   sor.setStddevMulThresh(sor_stddev_);
   pcl::Indices kept;
   sor.filter(kept);
-  kept_.clear();
-  for (const auto i : kept) {
-    kept_.positions.push_back(batch_.positions[i]);
-    kept_.colors.push_back(batch_.colors[i]);
-    kept_.weights.push_back(batch_.weights[i]);
-  }
-  std::swap(batch_, kept_);
+  std::vector<char> keep(batch_.size(), 0);
+  for (const auto i : kept) keep[static_cast<std::size_t>(i)] = 1;
+  float* pixels = depth_.ptr<float>();
+  for (std::size_t i = 0; i < batch_.size(); ++i)
+    if (!keep[i]) pixels[batch_.pixels[i]] = 0.0f;
 }
 
 }  // namespace rgbdmap

@@ -10,14 +10,12 @@ constexpr int kBits = 21;
 constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20, 2^20) to [0, 2^21)
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
-// Voxel coordinates shifted to [0, 2^21) per axis, or false outside the key range (or NaN).
-// Shifted first, the value is positive, so truncation is floor (cheaper than std::floor); in
-// double, the shift loses no fraction.
-bool voxelIndex(const Eigen::Vector3f& p, double inv_voxel_size, std::uint64_t index[3]) {
+bool packKey(const Eigen::Vector3i& coords, std::uint64_t& key) {
+  key = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    const double shifted = static_cast<double>(p[axis]) * inv_voxel_size + kOffset;
-    if (!(shifted >= 0.0 && shifted < 2.0 * kOffset)) return false;  // also rejects NaN
-    index[axis] = static_cast<std::uint64_t>(shifted);
+    const std::int64_t shifted = static_cast<std::int64_t>(coords[axis]) + kOffset;
+    if (shifted < 0 || shifted >= 2 * kOffset) return false;
+    key |= static_cast<std::uint64_t>(shifted) << (kBits * axis);
   }
   return true;
 }
@@ -26,15 +24,24 @@ bool voxelIndex(const Eigen::Vector3f& p, double inv_voxel_size, std::uint64_t i
 
 VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
     : voxel_size_(voxel_size),
-      inv_voxel_size_(1.0 / voxel_size),
-      min_observations_(std::max<std::uint32_t>(min_observations, 1)) {}
+      min_observations_(std::clamp<std::uint32_t>(min_observations, 1, 255)) {}
+
+std::size_t VoxelMap::memoryBytes() const {
+  return blocks_.size() * sizeof(Block) +
+         block_index_.bucket_count() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 8);
+}
 
 bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
-  std::uint64_t index[3];
-  key = 0;
-  if (!voxelIndex(p, inv_voxel_size_, index)) return false;
-  for (int axis = 0; axis < 3; ++axis) key |= index[axis] << (kBits * axis);
-  return true;
+  Eigen::Vector3i coords;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double scaled = std::floor(static_cast<double>(p[axis]) / voxel_size_);
+    if (!(std::abs(scaled) < static_cast<double>(kOffset))) {  // also rejects NaN
+      key = 0;
+      return false;
+    }
+    coords[axis] = static_cast<int>(scaled);
+  }
+  return packKey(coords, key);
 }
 
 Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
@@ -45,84 +52,155 @@ Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
   return v;
 }
 
-bool VoxelMap::slotOf(const Eigen::Vector3f& p, std::uint32_t& slot) {
-  std::uint64_t index[3];
-  if (!voxelIndex(p, inv_voxel_size_, index)) return false;
-  constexpr std::uint64_t kLocalMask = (1u << kBlockBits) - 1;
-  std::uint64_t block_key = 0;
-  std::uint32_t local = 0;
+std::uint32_t VoxelMap::touchBlock(const Eigen::Vector3i& block_coords) {
+  std::uint64_t key;
+  if (!packKey(block_coords, key)) return UINT32_MAX;
+  const auto [it, inserted] =
+      block_index_.try_emplace(key, static_cast<std::uint32_t>(blocks_.size()));
+  if (inserted) blocks_.emplace_back().origin = block_coords * kBlockEdge;
+  Block& b = blocks_[it->second];
+  if (b.touched_in != integration_) {
+    b.touched_in = integration_;
+    touched_.push_back(it->second);
+  }
+  return it->second;
+}
+
+const VoxelMap::Block* VoxelMap::findBlock(const Eigen::Vector3i& block_coords) const {
+  std::uint64_t key;
+  if (!packKey(block_coords, key)) return nullptr;
+  const auto it = block_index_.find(key);
+  return it == block_index_.end() ? nullptr : &blocks_[it->second];
+}
+
+VoxelMap::Neighbours VoxelMap::neighboursOf(const Block& block) const {
+  const Eigen::Vector3i c = block.origin / kBlockEdge;
+  Neighbours n;
   for (int axis = 0; axis < 3; ++axis) {
-    block_key |= (index[axis] >> kBlockBits) << (kBits * axis);
-    local |= static_cast<std::uint32_t>(index[axis] & kLocalMask) << (kBlockBits * axis);
-  }
-  if (block_key != last_block_key_ || last_block_ == UINT32_MAX) {
-    const auto [it, inserted] =
-        block_index_.try_emplace(block_key, static_cast<std::uint32_t>(blocks_.size()));
-    if (inserted) blocks_.emplace_back().fill(0);
-    last_block_key_ = block_key;
-    last_block_ = it->second;
-  }
-  slot = last_block_ * kBlockVoxels + local;
-  return true;
-}
-
-void VoxelMap::integrate(const PointBatch& batch) {
-  // Three passes over the points, so that the memory each one reads (cold, for a large map) can
-  // be prefetched a few points ahead instead of stalling on one cache miss after the other.
-  constexpr std::size_t kAhead = 16;
-  constexpr std::uint32_t kRejected = UINT32_MAX;
-  const std::size_t n = batch.size();
-  point_slots_.resize(n);
-  point_voxels_.resize(n);
-  // 1. The slot of each point's voxel (a hash lookup per block, not per point).
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!slotOf(batch.positions[i], point_slots_[i])) {
-      ++rejected_;
-      point_slots_[i] = kRejected;
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3i at = c;
+      at[axis] += side == 0 ? -1 : 1;
+      n[2 * axis + side] = findBlock(at);
     }
   }
-  // 2. The voxel of each slot, created on first sight (in point order: deterministic).
-  std::uint32_t* slots = blocks_.empty() ? nullptr : blocks_.front().data();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i + kAhead < n && point_slots_[i + kAhead] != kRejected)
-      __builtin_prefetch(slots + point_slots_[i + kAhead]);
-    if (point_slots_[i] == kRejected) continue;
-    std::uint32_t& slot = slots[point_slots_[i]];
-    if (slot == 0) {
-      voxels_.emplace_back();
-      slot = static_cast<std::uint32_t>(voxels_.size());
+  return n;
+}
+
+template <typename Emit>
+void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbours,
+                                   Emit&& emit) const {
+  constexpr int kEdge = kBlockEdge;
+  const float voxel = static_cast<float>(voxel_size_);
+  // The voxel one step from (x, y, z) along `axis` (side 0: -1, 1: +1), in this block or the
+  // next one; nullptr where there is none or it was never observed.
+  auto neighbour = [&](int x, int y, int z, int axis, int side) -> const Voxel* {
+    int at[3] = {x, y, z};
+    at[axis] += side == 0 ? -1 : 1;
+    const Block* in = &block;
+    if (at[axis] < 0 || at[axis] >= kEdge) {
+      in = neighbours[2 * axis + side];
+      if (in == nullptr) return nullptr;
+      at[axis] &= kEdge - 1;
     }
-    point_voxels_[i] = slot - 1;
-  }
-  // 3. The weighted running mean: after the update, position = sum(w p) / sum(w).
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i + kAhead < n && point_slots_[i + kAhead] != kRejected)
-      __builtin_prefetch(&voxels_[point_voxels_[i + kAhead]]);
-    if (point_slots_[i] == kRejected) continue;
-    Voxel& v = voxels_[point_voxels_[i]];
-    const float w = batch.weights[i];
-    v.weight += w;
-    const float alpha = w / v.weight;
-    v.position += alpha * (batch.positions[i] - v.position);
-    v.color += alpha * (batch.colors[i] - v.color);
-    if (++v.observations == min_observations_) ++points_;
+    const Voxel& v = in->voxels[(at[2] * kEdge + at[1]) * kEdge + at[0]];
+    return v.weight > 0.0f ? &v : nullptr;
+  };
+  for (int z = 0; z < kEdge; ++z) {
+    for (int y = 0; y < kEdge; ++y) {
+      for (int x = 0; x < kEdge; ++x) {
+        const Voxel& v = block.voxels[(z * kEdge + y) * kEdge + x];
+        // The nearer voxel of a crossing is within about half a voxel of the surface (a little
+        // more along an oblique line of sight); farther ones cannot be the nearer of a pair.
+        if (v.weight <= 0.0f || v.observations < min_observations_ || std::abs(v.sdf) >= voxel)
+          continue;
+        const bool front = v.sdf >= 0.0f;
+        bool surface = false;
+        Eigen::Vector3f gradient;
+        for (int axis = 0; axis < 3; ++axis) {
+          const Voxel* lower = neighbour(x, y, z, axis, 0);
+          const Voxel* upper = neighbour(x, y, z, axis, 1);
+          for (const Voxel* n : {lower, upper}) {
+            if (n == nullptr || (n->sdf >= 0.0f) == front) continue;
+            const float own = std::abs(v.sdf), other = std::abs(n->sdf);
+            if (own < other || (own == other && front)) surface = true;
+          }
+          if (lower && upper)
+            gradient[axis] = (upper->sdf - lower->sdf) / (2.0f * voxel);
+          else if (upper)
+            gradient[axis] = (upper->sdf - v.sdf) / voxel;
+          else if (lower)
+            gradient[axis] = (v.sdf - lower->sdf) / voxel;
+          else
+            gradient[axis] = 0.0f;
+        }
+        if (!surface) continue;
+        Eigen::Vector3f p = (block.origin + Eigen::Vector3i(x, y, z)).cast<float>();
+        p = (p + Eigen::Vector3f::Constant(0.5f)) * voxel;
+        // Onto the zero level of the locally linear field, at most a voxel away.
+        const float g2 = gradient.squaredNorm();
+        if (g2 > 1e-6f) {
+          Eigen::Vector3f step = -v.sdf * gradient / g2;
+          const float length = step.norm();
+          if (length > voxel) step *= voxel / length;
+          p += step;
+        }
+        emit(p, v);
+      }
+    }
   }
 }
 
-void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud,
-                       std::uint32_t min_observations) const {
+void VoxelMap::finishIntegration() {
+  // A voxel's status depends on its face neighbours, so blocks next to an updated one are
+  // recounted too.
+  std::vector<std::uint32_t> recount;
+  recount.reserve(touched_.size() * 2);
+  auto add = [&](std::uint32_t i) {
+    Block& b = blocks_[i];
+    if (b.recounted_in == integration_) return;
+    b.recounted_in = integration_;
+    recount.push_back(i);
+  };
+  for (const std::uint32_t i : touched_) {
+    add(i);
+    const Eigen::Vector3i c = blocks_[i].origin / kBlockEdge;
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const int step : {-1, 1}) {
+        Eigen::Vector3i at = c;
+        at[axis] += step;
+        std::uint64_t key;
+        if (!packKey(at, key)) continue;
+        const auto it = block_index_.find(key);
+        if (it != block_index_.end()) add(it->second);
+      }
+    }
+  }
+  touched_.clear();
+  for (const std::uint32_t i : recount) {
+    Block& b = blocks_[i];
+    std::uint32_t count = 0;
+    forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
+    points_ += count;
+    points_ -= b.surface_points;
+    b.surface_points = count;
+  }
+}
+
+void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   cloud.clear();
-  cloud.reserve(voxels_.size());
-  for (const Voxel& v : voxels_) {
-    if (v.observations < min_observations) continue;
-    pcl::PointXYZRGB p;
-    p.x = v.position.x();
-    p.y = v.position.y();
-    p.z = v.position.z();
-    p.r = static_cast<std::uint8_t>(std::lround(std::clamp(v.color.x(), 0.0f, 255.0f)));
-    p.g = static_cast<std::uint8_t>(std::lround(std::clamp(v.color.y(), 0.0f, 255.0f)));
-    p.b = static_cast<std::uint8_t>(std::lround(std::clamp(v.color.z(), 0.0f, 255.0f)));
-    cloud.push_back(p);
+  cloud.reserve(points_);
+  for (const Block& b : blocks_) {
+    if (b.surface_points == 0) continue;
+    forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
+      pcl::PointXYZRGB point;
+      point.x = p.x();
+      point.y = p.y();
+      point.z = p.z();
+      point.r = v.r;
+      point.g = v.g;
+      point.b = v.b;
+      cloud.push_back(point);
+    });
   }
   cloud.width = static_cast<std::uint32_t>(cloud.size());
   cloud.height = 1;

@@ -461,7 +461,9 @@ SyntheticScene SyntheticScene::load(const std::string& path) {
   return scene;
 }
 
-SyntheticScene SyntheticScene::defaultRoom() {
+SyntheticScene SyntheticScene::defaultRoom() { return defaultRoom(Eigen::Vector3d(5.0, 4.0, 2.8)); }
+
+SyntheticScene SyntheticScene::defaultRoom(const Eigen::Vector3d& size) {
   using Pattern = SurfaceTexture::Pattern;
   using V = Eigen::Vector3d;
   auto texture = [](Pattern pattern, cv::Vec3b a, cv::Vec3b b, double scale, double angle = 0.0) {
@@ -473,10 +475,26 @@ SyntheticScene SyntheticScene::defaultRoom() {
     t.angle_deg = angle;
     return t;
   };
-  SyntheticScene scene;
+  // The furniture is laid out for a 5 x 4 m floor; in another room each object's centre moves
+  // with the walls (its x and y scale with the room's), its size and height stay.
+  const V scale(size.x() / 5.0, size.y() / 4.0, 1.0);
+  struct Scaled {
+    SyntheticScene& scene;
+    V scale;
+    void addBox(const V& min, const V& max, const SurfaceTexture& t, const std::string& name) {
+      const V shift = (0.5 * (min + max)).cwiseProduct(scale) - 0.5 * (min + max);
+      scene.addBox(min + V(shift.x(), shift.y(), 0.0), max + V(shift.x(), shift.y(), 0.0), t,
+                   name);
+    }
+    void addSphere(const V& c, double r, const SurfaceTexture& t, const std::string& name) {
+      scene.addSphere(V(c.x() * scale.x(), c.y() * scale.y(), c.z()), r, t, name);
+    }
+  };
+  SyntheticScene room;
   // Floor, walls and ceiling share one checker of warm tones; 25 cm squares stay visible at 4 m.
-  scene.addRoom(V(-2.5, -2.0, 0.0), V(2.5, 2.0, 2.8),
-                texture(Pattern::kChecker, {225, 210, 180}, {90, 70, 60}, 0.25));
+  room.addRoom(V(-0.5 * size.x(), -0.5 * size.y(), 0.0), V(0.5 * size.x(), 0.5 * size.y(), size.z()),
+               texture(Pattern::kChecker, {225, 210, 180}, {90, 70, 60}, 0.25));
+  Scaled scene{room, scale};
   scene.addBox(V(0.6, -1.6, 0.0), V(1.8, -0.8, 0.75),
                texture(Pattern::kStripes, {150, 95, 45}, {235, 190, 120}, 0.06, 20.0), "table");
   scene.addBox(V(-2.5, 0.6, 0.0), V(-2.1, 1.6, 1.6),
@@ -495,7 +513,7 @@ SyntheticScene SyntheticScene::defaultRoom() {
   scene.addSphere(V(-1.55, -1.25, 0.75), 0.25,
                   texture(Pattern::kStripes, {20, 160, 180}, {250, 250, 250}, 0.06, 60.0),
                   "ball on cube");
-  return scene;
+  return room;
 }
 
 }  // namespace rgbdmap

@@ -42,6 +42,7 @@ void validate(const SyntheticSequenceOptions& o) {
   require(o.frames > 0, "frames must be positive");
   require(o.fps > 0.0 && o.fps <= 1000.0, "fps must be in (0, 1000]");
   require(o.loop_seconds > 0.0, "loop_seconds must be positive");
+  require(o.path_radius >= 0.0, "path_radius must not be negative");
   require(o.depth_offset >= 0.0 && o.depth_offset_jitter >= 0.0 &&
               o.depth_offset + o.depth_offset_jitter < 0.019,
           "depth offset + jitter must stay below TUM's 0.02 s association window");
@@ -127,6 +128,8 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
   out << YAML::Key << "frames" << YAML::Value << o.frames;
   out << YAML::Key << "fps" << YAML::Value << o.fps;
   out << YAML::Key << "seed" << YAML::Value << o.seed;
+  out << YAML::Key << "noise_seed" << YAML::Value << o.noise_seed;
+  out << YAML::Key << "path_radius" << YAML::Value << o.path_radius;
   out << YAML::Key << "noise" << YAML::Value << o.noise;
   out << YAML::Key << "loop_seconds" << YAML::Value << o.loop_seconds;
   out << YAML::Key << "camera" << YAML::Value << YAML::Flow << YAML::BeginMap;
@@ -155,12 +158,14 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
 
 double kinectDepthSigma(double z) { return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4); }
 
-HandheldPath::HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds)
+HandheldPath::HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds,
+                           double radius)
     : loop_seconds_(loop_seconds) {
   const Eigen::Vector3d size = room.max - room.min;
   center_ = 0.5 * (room.min + room.max);
   center_.z() = room.min.z() + 0.5 * size.z();
-  radius_ = Eigen::Vector2d(0.16 * size.x(), 0.15 * size.y());
+  radius_ = radius > 0.0 ? Eigen::Vector2d(radius, radius)
+                         : Eigen::Vector2d(0.16 * size.x(), 0.15 * size.y());
   std::mt19937_64 random(seed);
   std::uniform_real_distribution<double> angle(0.0, 2.0 * M_PI);
   for (double& p : phase_) p = angle(random);
@@ -265,7 +270,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     if (ec) throw InputError(folder + "/" + sub + ": cannot create folder (" + ec.message() + ")");
   }
 
-  const HandheldPath path(scene.room(), options.seed, options.loop_seconds);
+  const HandheldPath path(scene.room(), options.seed, options.loop_seconds, options.path_radius);
   const double duration = (options.frames - 1) / options.fps;
   const int gt_margin = 5;  // samples of ground truth before the first and after the last frame
   const int gt_samples = static_cast<int>(std::ceil(duration * options.groundtruth_rate));
@@ -319,7 +324,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
 
     cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
       for (int v = rows.start; v < rows.end; ++v) {
-        std::mt19937_64 random(rowSeed(options.seed, i, v));
+        std::mt19937_64 random(rowSeed(options.noise_seed, i, v));
         std::normal_distribution<float> gauss(0.0f, 1.0f);
         std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
         const auto* z_row = depth.ptr<float>(v);

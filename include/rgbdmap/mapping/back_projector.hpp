@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
-#include "rgbdmap/mapping/voxel_map.hpp"
+#include "rgbdmap/mapping/point_batch.hpp"
 
 namespace rgbdmap {
 

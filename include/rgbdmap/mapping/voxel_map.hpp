@@ -7,23 +7,10 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <vector>
 
 namespace rgbdmap {
-
-// Points of one keyframe in world coordinates, ready to fuse.
-struct PointBatch {
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<Eigen::Vector3f> colors;  // RGB, 0..255
-  std::vector<float> weights;           // inverse measurement variance (relative)
-
-  void clear() {
-    positions.clear();
-    colors.clear();
-    weights.clear();
-  }
-  std::size_t size() const { return positions.size(); }
-};
 
 // Mixes all bits of a packed key: the identity hash std::hash gives integers puts neighbouring
 // blocks into neighbouring buckets, which overflows hopscotch neighbourhoods.
@@ -38,73 +25,84 @@ struct VoxelKeyHash {
   }
 };
 
-// A sparse voxel grid in which every voxel keeps the weighted running mean of the positions and
-// colours that fell into it. Voxel keys pack 21 bits per axis: no extent limit short of ±2^20
-// voxels per axis (±10 km at 1 cm), memory proportional to the occupied space, one output point
-// per voxel by construction.
+// A sparse truncated signed distance field: each voxel holds the weighted mean of the signed
+// distances along the line of sight to the surfaces measured through it (positive in front of
+// a surface, negative behind it), so repeated noisy views of a surface average into one zero
+// crossing instead of scattering points in front of and behind it.
 //
-// Layout (for speed): a keyframe touches ~100k voxels, and one random hash lookup per voxel in
-// a table of millions is one cache miss each, most of a keyframe's cost. So voxels are grouped
-// in blocks of 4x4x4: the hash holds blocks, a block holds the indices of its voxels (256 B), and
-// the voxels themselves sit in one array in the order they were created. Consecutive pixels
-// mostly stay in one block (one hash lookup per block, not per point), and a revisit reads
-// voxels in about the order it created them. (8^3 blocks fuse ~8% faster, but cost 2 KB per
-// isolated voxel: 0.7 GB for the 360k scattered points of a test.)
+// Voxels live in blocks of 8x8x8 allocated only near measured surfaces (TsdfIntegrator does
+// that), found through a hash of block coordinates; keys pack 21 bits per axis (±2^20 blocks).
+// The map a user gets is one point per surface voxel (extract()): a voxel next to a sign change
+// whose |distance| is the smaller of the pair, moved onto the zero level along the gradient.
 class VoxelMap {
  public:
   struct Voxel {
-    Eigen::Vector3f position = Eigen::Vector3f::Zero();
-    Eigen::Vector3f color = Eigen::Vector3f::Zero();
-    float weight = 0.0f;
-    std::uint32_t observations = 0;  // points fused into this voxel
+    float sdf = 0.0f;     // metres, truncated
+    float weight = 0.0f;  // sum of measurement weights; 0 = never observed
+    std::uint8_t r = 0, g = 0, b = 0;
+    std::uint8_t observations = 0;  // frames fused into this voxel, saturating at 255
+  };
+  static constexpr int kBlockBits = 3;
+  static constexpr int kBlockEdge = 1 << kBlockBits;  // voxels per block edge
+  static constexpr int kBlockVoxels = kBlockEdge * kBlockEdge * kBlockEdge;
+  struct Block {
+    Eigen::Vector3i origin;                  // voxel coordinates of the block's first voxel
+    std::array<Voxel, kBlockVoxels> voxels;  // x fastest, then y, then z
+    std::uint32_t surface_points = 0;        // what extract() writes from this block
+    std::uint64_t touched_in = 0;            // the last integration that updated it
+    std::uint64_t recounted_in = 0;          // the last integration that recounted it
   };
 
-  // Voxels that received fewer than min_observations points are kept (more may come) but not
-  // extracted: with many frames, a voxel holding a single point is almost always a noise tail.
+  // Voxels seen in fewer than min_observations frames are kept (more may come) but not
+  // extracted.
   explicit VoxelMap(double voxel_size, std::uint32_t min_observations = 1);
 
-  void integrate(const PointBatch& batch);
-
-  std::size_t size() const { return voxels_.size(); }  // every voxel
-  std::size_t pointCount() const { return points_; }   // voxels extract() writes
-  std::uint32_t minObservations() const { return min_observations_; }
   double voxelSize() const { return voxel_size_; }
-  std::uint64_t rejectedPoints() const { return rejected_; }
-  // One point per voxel observed at least min_observations times (the map's own by default), in
-  // a deterministic order (the order the voxels were created in).
-  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
-    extract(cloud, min_observations_);
-  }
-  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud, std::uint32_t min_observations) const;
-  // Every voxel, in the order they were created.
-  const std::vector<Voxel>& voxels() const { return voxels_; }
+  std::uint32_t minObservations() const { return min_observations_; }
+  std::size_t blockCount() const { return blocks_.size(); }
+  std::size_t memoryBytes() const;
+  // Points extract() writes, kept up to date by finishIntegration().
+  std::size_t pointCount() const { return points_; }
 
-  // Voxel coordinates <-> key. Exposed for tests; keyFor returns false outside the key range.
+  // One coloured point per surface voxel, in a deterministic order (blocks in the order they
+  // were created).
+  void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const;
+
+  // --- for the integrator ---
+  // Starts an integration: blocks allocated or fetched with touchBlock() until
+  // finishIntegration() form its working set.
+  void beginIntegration() { ++integration_; }
+  // The block with these block coordinates, created if new, added to the working set; returns
+  // its index, or UINT32_MAX outside the key range.
+  std::uint32_t touchBlock(const Eigen::Vector3i& block_coords);
+  const std::vector<std::uint32_t>& touchedBlocks() const { return touched_; }
+  Block& block(std::uint32_t index) { return blocks_[index]; }
+  const Block& block(std::uint32_t index) const { return blocks_[index]; }
+  // Recounts the surface points of the working set and of the blocks next to it (whose border
+  // voxels may have changed status), then clears the working set.
+  void finishIntegration();
+
+  // Voxel coordinates <-> key of the voxel that contains p. Exposed for tests; keyFor returns
+  // false outside the key range.
   bool keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const;
   static Eigen::Vector3i unpack(std::uint64_t key);
 
  private:
-  static constexpr int kBlockBits = 2;  // 4 voxels per block edge
-  static constexpr int kBlockVoxels = 1 << (3 * kBlockBits);
-  // Index + 1 in voxels_ of each voxel of a block; 0 = not observed yet.
-  using Block = std::array<std::uint32_t, kBlockVoxels>;
-
-  // Where the slot of the voxel containing p is (block index * kBlockVoxels + position in the
-  // block), creating the block if new; false outside the key range.
-  bool slotOf(const Eigen::Vector3f& p, std::uint32_t& slot);
+  // The 6 face neighbours of a block (-x, +x, -y, +y, -z, +z), nullptr where none.
+  using Neighbours = std::array<const Block*, 6>;
+  Neighbours neighboursOf(const Block& block) const;
+  const Block* findBlock(const Eigen::Vector3i& block_coords) const;
+  // Calls emit(position, voxel) for each surface voxel of the block, in voxel order.
+  template <typename Emit>
+  void forEachSurfaceVoxel(const Block& block, const Neighbours& neighbours, Emit&& emit) const;
 
   double voxel_size_;
-  double inv_voxel_size_;
   std::uint32_t min_observations_;
-  std::size_t points_ = 0;  // voxels with at least min_observations_ points
-  tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // key -> blocks_
-  std::vector<Block> blocks_;
-  std::vector<Voxel> voxels_;
-  std::vector<std::uint32_t> point_slots_, point_voxels_;  // per point of a batch (scratch)
-  // The block of the previous lookup: neighbouring pixels usually fall into the same one.
-  std::uint64_t last_block_key_ = 0;
-  std::uint32_t last_block_ = UINT32_MAX;
-  std::uint64_t rejected_ = 0;
+  std::size_t points_ = 0;
+  std::uint64_t integration_ = 0;
+  tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // -> blocks_
+  std::deque<Block> blocks_;  // a deque: growing never copies the blocks there are
+  std::vector<std::uint32_t> touched_;
 };
 
 }  // namespace rgbdmap

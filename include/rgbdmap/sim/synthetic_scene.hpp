@@ -73,6 +73,9 @@ class SyntheticScene {
   // A 5 x 4 x 2.8 m room with a table, a cabinet, cubes on the floor and the table, and three
   // spheres; world z is up, the floor is z = 0, the room is centred on x = y = 0.
   static SyntheticScene defaultRoom();
+  // The same furniture in a room of another size (x, y, z in metres, each at least 3 x 3 x 2):
+  // the objects keep their sizes and heights, their places move with the walls.
+  static SyntheticScene defaultRoom(const Eigen::Vector3d& size);
 
  private:
   std::vector<ScenePrimitive> primitives_;

@@ -20,7 +20,9 @@ double kinectDepthSigma(double z);
 // the small perturbations, so every seed keeps well clear of the scene's surfaces.
 class HandheldPath {
  public:
-  HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds);
+  // radius: of the circle (m, both axes); 0: 16% of the room's length and 15% of its width.
+  HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds,
+               double radius = 0.0);
   // Camera-to-world pose (x right, y down, z forward) at t seconds after the start.
   Eigen::Isometry3d pose(double t) const;
 
@@ -34,9 +36,11 @@ class HandheldPath {
 struct SyntheticSequenceOptions {
   int frames = 300;
   double fps = 30.0;
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1;        // the camera path's sway and the depth stamps
+  std::uint64_t noise_seed = 1;  // the sensor noise: a second pass over a path with fresh noise
   bool noise = true;  // depth noise, dropouts and colour noise; false: exact depth (quantised)
   double loop_seconds = 12.0;        // one circle of the room
+  double path_radius = 0.0;          // m: of the circle; 0: scaled to the room (HandheldPath)
   double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
   // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
   // always inside the 0.02 s association window). Both images are rendered at the colour
