@@ -145,6 +145,8 @@ std::vector<Config::Key> Config::keys() {
               "dense: coarsest pyramid level aligned (each level halves the image)"),
       integer("tracking.finest_level", &tracking.finest_level, 0, 6,
               "dense: finest pyramid level aligned (0 = full resolution, 1 = 320x240)"),
+      boolean("tracking.undistort", &tracking.undistort,
+              "dense: undo lens distortion in the tracking pyramid (depth and 3-D points agree)"),
       integer("tracking.max_iterations", &tracking.max_iterations, 1, 100,
               "dense: Gauss-Newton steps per coarse level"),
       integer("tracking.finest_iterations", &tracking.finest_iterations, 1, 100,

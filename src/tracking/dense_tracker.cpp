@@ -103,7 +103,8 @@ bool DenseTracker::lose(Frame& frame, const Eigen::Isometry3d& predicted, const 
 
 bool DenseTracker::estimate(Frame& frame) {
   const int levels = options_.coarsest_level + 1;
-  pyramid_.build(frame, camera_, levels, options_.finest_level, min_depth_, max_depth_);
+  pyramid_.build(frame, camera_, levels, options_.finest_level, options_.undistort, min_depth_,
+                 max_depth_);
   const bool enough_depth = pyramid_.depthFraction() >= options_.min_depth_fraction;
   if (!started_) {
     last_timestamp_ = frame.timestamp;

@@ -1,6 +1,7 @@
 #include "rgbdmap/tracking/image_pyramid.hpp"
 
 #include <cmath>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace rgbdmap {
@@ -76,30 +77,58 @@ LevelCamera LevelCamera::halved() const {
   return {width / 2, height / 2, fx / 2, fy / 2, (cx + 0.5f) / 2 - 0.5f, (cy + 0.5f) / 2 - 0.5f};
 }
 
-void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int levels,
-                         int first_sampled, float min_depth, float max_depth) {
+void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
+                         bool undistort, float min_depth, float max_depth) {
   levels_.resize(static_cast<std::size_t>(levels));
-  PyramidLevel& base = levels_[0];
-  base.camera = {frame.depth.cols,         frame.depth.rows,         static_cast<float>(camera.fx),
-                 static_cast<float>(camera.fy), static_cast<float>(camera.cx),
-                 static_cast<float>(camera.cy)};
-  cv::Mat gray8;
-  cv::cvtColor(frame.color, gray8, cv::COLOR_BGR2GRAY);
-  gray8.convertTo(base.gray, CV_32F);
-  base.depth.create(frame.depth.size(), CV_32FC1);
+  LevelCamera full{frame.depth.cols,
+                   frame.depth.rows,
+                   static_cast<float>(camera.fx),
+                   static_cast<float>(camera.fy),
+                   static_cast<float>(camera.cx),
+                   static_cast<float>(camera.cy)};
+  LevelCamera at_first = full;
+  for (int i = 0; i < first; ++i) at_first = at_first.halved();
+  cv::cvtColor(frame.color, gray8_, cv::COLOR_BGR2GRAY);
+  PyramidLevel& base = levels_[static_cast<std::size_t>(first)];
+  base.camera = at_first;
+  if (undistort && camera.hasDistortion()) {
+    const cv::Size size(at_first.width, at_first.height);
+    if (map_for_ != size) {
+      const cv::Matx33d K(at_first.fx, 0, at_first.cx, 0, at_first.fy, at_first.cy, 0, 0, 1);
+      cv::initUndistortRectifyMap(camera.cameraMatrix(), camera.distortion(), cv::noArray(), K,
+                                  size, CV_32FC1, map_x_, map_y_);
+      map_for_ = size;
+    }
+    cv::remap(gray8_, raw_, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    raw_.convertTo(base.gray, CV_32F);
+    // Depth is not interpolated across the image: nearest sample, or a missing one.
+    cv::remap(frame.depth, base.depth, map_x_, map_y_, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+              cv::Scalar(0));
+  } else {
+    PyramidLevel& level0 = levels_[0];
+    level0.camera = full;
+    gray8_.convertTo(level0.gray, CV_32F);
+    frame.depth.copyTo(level0.depth);
+    for (int i = 1; i <= first; ++i) {
+      PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
+      PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
+      coarse.camera = fine.camera.halved();
+      cv::resize(fine.gray, coarse.gray, cv::Size(fine.gray.cols / 2, fine.gray.rows / 2), 0, 0,
+                 cv::INTER_AREA);
+      halveDepth(fine.depth, coarse.depth);
+    }
+  }
   int valid = 0;
-  for (int y = 0; y < frame.depth.rows; ++y) {
-    const float* in = frame.depth.ptr<float>(y);
-    float* out = base.depth.ptr<float>(y);
-    for (int x = 0; x < frame.depth.cols; ++x) {
-      const float z = in[x];
-      const bool ok = z >= min_depth && z <= max_depth;  // also false for NaN
-      out[x] = ok ? z : 0.0f;
+  for (int y = 0; y < base.depth.rows; ++y) {
+    float* d = base.depth.ptr<float>(y);
+    for (int x = 0; x < base.depth.cols; ++x) {
+      const bool ok = d[x] >= min_depth && d[x] <= max_depth;  // also false for NaN
+      if (!ok) d[x] = 0.0f;
       valid += ok;
     }
   }
-  depth_fraction_ = static_cast<double>(valid) / static_cast<double>(frame.depth.total());
-  for (int i = 1; i < levels; ++i) {
+  depth_fraction_ = static_cast<double>(valid) / static_cast<double>(base.depth.total());
+  for (int i = first + 1; i < levels; ++i) {
     PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
     PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
     coarse.camera = fine.camera.halved();
@@ -107,7 +136,7 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
                cv::INTER_AREA);
     halveDepth(fine.depth, coarse.depth);
   }
-  for (int i = first_sampled; i < levels; ++i) computeSamples(levels_[static_cast<std::size_t>(i)]);
+  for (int i = first; i < levels; ++i) computeSamples(levels_[static_cast<std::size_t>(i)]);
 }
 
 }  // namespace rgbdmap

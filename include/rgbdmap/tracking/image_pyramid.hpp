@@ -33,10 +33,12 @@ struct PyramidLevel {
 // from frame to frame (build() writes in place).
 class ImagePyramid {
  public:
-  // Fills levels 0..levels-1 from a BGR colour and a depth image in metres; depth outside
-  // [min_depth, max_depth] counts as missing. Samples are computed for levels >= first_sampled.
-  void build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first_sampled,
-             float min_depth, float max_depth);
+  // Fills levels first..levels-1 from a BGR colour and a depth image in metres; depth outside
+  // [min_depth, max_depth] counts as missing. With `undistort` and a camera with lens
+  // distortion, level `first` is resampled straight from the raw images to an ideal pinhole
+  // camera (so the 3-D points and the projection agree everywhere in the image).
+  void build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
+             bool undistort, float min_depth, float max_depth);
   int levels() const { return static_cast<int>(levels_.size()); }
   const PyramidLevel& level(int i) const { return levels_[static_cast<std::size_t>(i)]; }
   // Fraction of full-resolution pixels with a usable depth.
@@ -45,6 +47,8 @@ class ImagePyramid {
  private:
   std::vector<PyramidLevel> levels_;
   double depth_fraction_ = 0.0;
+  cv::Mat gray8_, map_x_, map_y_, raw_;  // reused buffers; the undistortion maps
+  cv::Size map_for_;
 };
 
 }  // namespace rgbdmap
