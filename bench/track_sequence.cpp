@@ -66,8 +66,8 @@ Outcome track(rgbdmap::TumSequence& sequence, rgbdmap::Config config, const std:
   out.median_ms = percentile(tracked, 0.5);
   out.p95_ms = percentile(tracked, 0.95);
   if (sequence.hasGroundtruth()) {
-    out.ate = rgbdmap::absoluteTrajectoryError(out.trajectory, sequence.groundtruth())
-                  .translation.rmse;
+    out.ate =
+        rgbdmap::absoluteTrajectoryError(out.trajectory, sequence.groundtruth()).translation.rmse;
     const rgbdmap::RelativePoseError rpe =
         rgbdmap::relativePoseError(out.trajectory, sequence.groundtruth());
     out.rpe_t = rpe.translation.rmse;
@@ -110,9 +110,8 @@ int main(int argc, char** argv) {
       if (!prefix.empty()) outcomes.back().trajectory.save(prefix + method + ".txt");
     }
     std::printf("%s: %zu frames\n", folder.c_str(), sequence.size());
-    std::printf("%-16s %9s %10s %10s %6s %6s %9s %8s %10s %10s\n", "method", "ATE(cm)",
-                "RPE(cm/s)", "RPE(deg/s)", "lost", "reloc", "median ms", "p95 ms", "ATE ratio",
-                "time ratio");
+    std::printf("%-16s %9s %10s %10s %6s %6s %9s %8s %10s %10s\n", "method", "ATE(cm)", "RPE(cm/s)",
+                "RPE(deg/s)", "lost", "reloc", "median ms", "p95 ms", "ATE ratio", "time ratio");
     std::ostringstream js;
     js << "{\"sequence\": \"" << folder << "\", \"frames\": " << sequence.size()
        << ", \"methods\": [";
@@ -121,9 +120,9 @@ int main(int argc, char** argv) {
       const Outcome& base = outcomes.front();
       const double ate_ratio = base.ate > 0 ? o.ate / base.ate : 0;
       const double time_ratio = base.median_ms > 0 ? o.median_ms / base.median_ms : 0;
-      std::printf("%-16s %9.2f %10.2f %10.2f %6d %6d %9.2f %8.2f %10.2f %10.2f\n",
-                  o.method.c_str(), o.ate * 100, o.rpe_t * 100, o.rpe_r, o.lost, o.relocalised,
-                  o.median_ms, o.p95_ms, ate_ratio, time_ratio);
+      std::printf("%-16s %9.2f %10.2f %10.2f %6d %6d %9.2f %8.2f %10.2f %10.2f\n", o.method.c_str(),
+                  o.ate * 100, o.rpe_t * 100, o.rpe_r, o.lost, o.relocalised, o.median_ms, o.p95_ms,
+                  ate_ratio, time_ratio);
       js << (i ? ", " : "") << "{\"method\": \"" << o.method << "\", \"ate_rmse\": " << o.ate
          << ", \"rpe_translation_rmse\": " << o.rpe_t << ", \"rpe_rotation_rmse\": " << o.rpe_r
          << ", \"lost\": " << o.lost << ", \"relocalised\": " << o.relocalised

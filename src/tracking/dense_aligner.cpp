@@ -68,7 +68,8 @@ PixelSample bilinear(const PyramidLevel& level, float u, float v, bool& depth_ok
   const int x = static_cast<int>(u), y = static_cast<int>(v);
   const float ax = u - static_cast<float>(x), ay = v - static_cast<float>(y);
   const std::size_t w = static_cast<std::size_t>(level.camera.width);
-  const PixelSample* p = &level.samples[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)];
+  const PixelSample* p =
+      &level.samples[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(x)];
   const PixelSample& s00 = p[0];
   const PixelSample& s01 = p[1];
   const PixelSample& s10 = p[w];
@@ -202,9 +203,8 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       if (step.head<3>().norm() < 1e-5 && step.tail<3>().norm() < 1e-5) break;
     }
     if (l == finest) {
-      result.overlap = points.empty() ? 0.0
-                                      : static_cast<double>(landed) /
-                                            static_cast<double>(points.size());
+      result.overlap =
+          points.empty() ? 0.0 : static_cast<double>(landed) / static_cast<double>(points.size());
       result.intensity_sigma = sigma_i;
       if (landed > 0) {
         Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H / static_cast<double>(landed),

@@ -8,9 +8,7 @@
 namespace rgbdmap {
 namespace {
 
-double angle(const Eigen::Isometry3d& t) {
-  return Eigen::AngleAxisd(t.linear()).angle();
-}
+double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
 
 // The motion t scaled to a fraction s of itself (rotation angle and translation), e.g. the
 // per-frame share of a motion over several frame periods.
@@ -131,8 +129,8 @@ bool DenseTracker::estimate(Frame& frame) {
     return accept(frame, pose, TrackingState::kRelocalised);
   }
 
-  last_result_ = aligner_.align(keyframe_->reference, pyramid_,
-                                rigid(predicted.inverse() * keyframe_->pose));
+  last_result_ =
+      aligner_.align(keyframe_->reference, pyramid_, rigid(predicted.inverse() * keyframe_->pose));
   const Eigen::Isometry3d pose = rigid(keyframe_->pose * last_result_.motion.inverse());
   if (std::getenv("RGBDMAP_TRACK_DEBUG"))
     std::fprintf(stderr, "frame %llu overlap %.3f sigma %.2f info %.3g jump %.4f\n",

@@ -16,13 +16,13 @@ struct TrackingOptions {
   // coarsest_level down to finest_level.
   int coarsest_level = 3;
   int finest_level = 2;
-  bool undistort = true;  // resample the finest level to a pinhole camera when the lens distorts
-  int max_iterations = 12;       // Gauss-Newton steps per level (coarse levels)
-  int finest_iterations = 6;     // on the finest level, where a step costs the most
-  double depth_weight = 0.0;     // weight of a (normalised) depth residual vs an intensity one
-  double huber_k = 1.345;        // Huber threshold, in robust standard deviations
-  double min_gradient = 3.0;     // finest level: pixels with a weaker intensity gradient only
-                                 // take part every second row and column (grey levels/px)
+  bool undistort = true;    // resample the finest level to a pinhole camera when the lens distorts
+  int max_iterations = 12;  // Gauss-Newton steps per level (coarse levels)
+  int finest_iterations = 6;  // on the finest level, where a step costs the most
+  double depth_weight = 0.0;  // weight of a (normalised) depth residual vs an intensity one
+  double huber_k = 1.345;     // Huber threshold, in robust standard deviations
+  double min_gradient = 3.0;  // finest level: pixels with a weaker intensity gradient only
+                              // take part every second row and column (grey levels/px)
 
   // A new keyframe after this much motion from the last one, or when too little of it is seen.
   double keyframe_translation = 0.08;  // m
@@ -30,9 +30,9 @@ struct TrackingOptions {
   double keyframe_min_overlap = 0.6;   // fraction of the keyframe's pixels that land in view
 
   // An estimate is rejected (frame lost, not mapped) when any of these fail.
-  double min_overlap = 0.25;         // fraction of keyframe pixels seen in the frame
-  double min_depth_fraction = 0.05;  // of the frame's pixels with a usable depth
-  double max_residual = 60.0;        // robust std-dev of the intensity residual (grey levels)
+  double min_overlap = 0.25;           // fraction of keyframe pixels seen in the frame
+  double min_depth_fraction = 0.05;    // of the frame's pixels with a usable depth
+  double max_residual = 60.0;          // robust std-dev of the intensity residual (grey levels)
   double max_jump_translation = 0.10;  // m from the constant-velocity prediction per frame
   double max_jump_rotation = 0.26;     // rad from the prediction per frame (15 degrees)
 
