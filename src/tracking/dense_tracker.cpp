@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 namespace rgbdmap {
 namespace {
@@ -88,9 +86,7 @@ bool DenseTracker::accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingS
 }
 
 bool DenseTracker::lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why) {
-  if (std::getenv("RGBDMAP_TRACK_DEBUG"))
-    std::fprintf(stderr, "frame %llu lost: %s\n", static_cast<unsigned long long>(frame.index),
-                 why);
+  loss_reason_ = why;
   frame.pose = predicted;
   frame.has_pose = false;
   state_ = TrackingState::kLost;
@@ -132,11 +128,6 @@ bool DenseTracker::estimate(Frame& frame) {
   last_result_ =
       aligner_.align(keyframe_->reference, pyramid_, rigid(predicted.inverse() * keyframe_->pose));
   const Eigen::Isometry3d pose = rigid(keyframe_->pose * last_result_.motion.inverse());
-  if (std::getenv("RGBDMAP_TRACK_DEBUG"))
-    std::fprintf(stderr, "frame %llu overlap %.3f sigma %.2f info %.3g jump %.4f\n",
-                 static_cast<unsigned long long>(frame.index), last_result_.overlap,
-                 last_result_.intensity_sigma, last_result_.min_information,
-                 (predicted.inverse() * pose).translation().norm());
   if (const char* why = reject(last_result_, pose, predicted, periods, true)) {
     velocity_.setIdentity();
     return lose(frame, predicted, why);

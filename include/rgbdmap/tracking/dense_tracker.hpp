@@ -31,6 +31,8 @@ class DenseTracker : public PoseProvider {
   std::uint64_t lostFrames() const { return lost_frames_; }
   std::uint64_t relocalisations() const { return relocalisations_; }
   std::uint64_t keyframes() const { return keyframes_made_; }
+  // Why the last lost frame was lost (e.g. "residual too large"), for logs and status lines.
+  const char* lossReason() const { return loss_reason_; }
 
  private:
   struct Keyframe {
@@ -61,6 +63,7 @@ class DenseTracker : public PoseProvider {
   double frame_period_ = 1.0 / 30.0;
   bool started_ = false;
   bool lost_ = false;
+  const char* loss_reason_ = "";
   TrackingState state_ = TrackingState::kNoPose;
   std::uint64_t lost_frames_ = 0, relocalisations_ = 0, keyframes_made_ = 0;
 };
