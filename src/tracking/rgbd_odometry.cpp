@@ -9,8 +9,12 @@ RgbdOdometryPoses::RgbdOdometryPoses(const CameraIntrinsics& camera, const Optio
     : options_(options) {
   cv::Mat K;
   cv::Mat(camera.cameraMatrix()).convertTo(K, CV_32F);
-  odometry_ = cv::rgbd::RgbdOdometry::create(K, static_cast<float>(options.min_depth),
-                                             static_cast<float>(options.max_depth));
+  const float min_depth = static_cast<float>(options.min_depth);
+  const float max_depth = static_cast<float>(options.max_depth);
+  if (options.icp)
+    odometry_ = cv::rgbd::RgbdICPOdometry::create(K, min_depth, max_depth);
+  else
+    odometry_ = cv::rgbd::RgbdOdometry::create(K, min_depth, max_depth);
 }
 
 cv::Ptr<cv::rgbd::OdometryFrame> RgbdOdometryPoses::makeFrame(const Frame& frame) {

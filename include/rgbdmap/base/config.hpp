@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/tracking_options.hpp"
 
 namespace rgbdmap {
 
@@ -26,6 +27,8 @@ struct Config {
   std::string pose_source = "auto";  // pose.source: auto | groundtruth | odometry | trajectory
   std::string pose_trajectory;       // pose.trajectory: TUM file for pose.source=trajectory
   double pose_max_gap = 0.05;        // pose.max_gap: s to the nearest ground truth sample
+
+  TrackingOptions tracking;  // tracking.*: odometry for sources without ground truth
 
   std::string keyframe_policy = "auto";    // keyframe.policy: auto | interval | motion | both
   int keyframe_every_n = 10;               // keyframe.every_n

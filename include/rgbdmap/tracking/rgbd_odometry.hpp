@@ -24,11 +24,15 @@ class RgbdOdometryPoses : public PoseProvider {
     // hand-held camera at 30 fps does not change its speed by 0.15 m/frame or turn 20° more.
     double max_jump_translation = 0.15;  // m
     double max_jump_rotation = 0.35;     // rad
+    bool icp = false;  // RgbdICPOdometry (depth only, point-to-plane) instead of RgbdOdometry
   };
   RgbdOdometryPoses(const CameraIntrinsics& camera, const Options& options);
 
   bool estimate(Frame& frame) override;
-  std::string describe() const override { return "RGB-D odometry (OpenCV rgbd::RgbdOdometry)"; }
+  std::string describe() const override {
+    return options_.icp ? "RGB-D odometry (OpenCV rgbd::RgbdICPOdometry)"
+                        : "RGB-D odometry (OpenCV rgbd::RgbdOdometry)";
+  }
   TrackingState state() const override { return state_; }
   std::uint64_t failures() const { return failures_; }
 
@@ -39,7 +43,7 @@ class RgbdOdometryPoses : public PoseProvider {
                                              const Eigen::Isometry3d& guess) const;
 
   Options options_;
-  cv::Ptr<cv::rgbd::RgbdOdometry> odometry_;
+  cv::Ptr<cv::rgbd::Odometry> odometry_;
   cv::Ptr<cv::rgbd::OdometryFrame> reference_;
   Eigen::Isometry3d reference_pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_pose_ = Eigen::Isometry3d::Identity();

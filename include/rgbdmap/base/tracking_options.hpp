@@ -1,0 +1,44 @@
+#pragma once
+
+#include <string>
+
+namespace rgbdmap {
+
+// The tunables of camera tracking (config section "tracking"). They live in base so that
+// Config can hold them; the tracking layer reads them. Defaults are the measured ones (see
+// bench/track_sequence.cpp and the README's tracking table).
+struct TrackingOptions {
+  // dense: our photometric + geometric aligner against the last keyframe; opencv_rgbd and
+  // opencv_rgbd_icp: OpenCV's RgbdOdometry / RgbdICPOdometry against a reference frame.
+  std::string method = "dense";
+
+  // Image pyramid: level 0 is full resolution, each level halves it. Alignment runs from
+  // coarsest_level down to finest_level.
+  int coarsest_level = 3;
+  int finest_level = 2;
+  bool undistort = true;    // resample the finest level to a pinhole camera when the lens distorts
+  int max_iterations = 12;  // Gauss-Newton steps per level (coarse levels)
+  int finest_iterations = 6;  // on the finest level, where a step costs the most
+  double depth_weight = 0.0;  // weight of a (normalised) depth residual vs an intensity one
+  double huber_k = 1.345;     // Huber threshold, in robust standard deviations
+  double min_gradient = 3.0;  // finest level: pixels with a weaker intensity gradient only
+                              // take part every second row and column (grey levels/px)
+
+  // A new keyframe after this much motion from the last one, or when too little of it is seen.
+  double keyframe_translation = 0.08;  // m
+  double keyframe_rotation = 0.20;     // rad
+  double keyframe_min_overlap = 0.6;   // fraction of the keyframe's pixels that land in view
+
+  // An estimate is rejected (frame lost, not mapped) when any of these fail.
+  double min_overlap = 0.25;           // fraction of keyframe pixels seen in the frame
+  double min_depth_fraction = 0.05;    // of the frame's pixels with a usable depth
+  double max_residual = 60.0;          // robust std-dev of the intensity residual (grey levels)
+  double max_jump_translation = 0.10;  // m from the constant-velocity prediction per frame
+  double max_jump_rotation = 0.26;     // rad from the prediction per frame (15 degrees)
+
+  // Relocalisation after a loss: recent keyframes are kept and matched with ORB features.
+  int relocalisation_keyframes = 10;
+  int relocalisation_min_inliers = 30;  // PnP RANSAC inliers a candidate needs
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,50 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "rgbdmap/base/tracking_options.hpp"
+#include "rgbdmap/tracking/image_pyramid.hpp"
+
+namespace rgbdmap {
+
+// The pixels of a keyframe that take part in alignment, per pyramid level: each one's 3-D
+// point in the keyframe's camera and its intensity.
+struct AlignmentReference {
+  struct Level {
+    LevelCamera camera;
+    std::vector<Eigen::Vector4f, Eigen::aligned_allocator<Eigen::Vector4f>> points;  // x y z I
+  };
+  std::vector<Level> levels;
+  int valid_pixels = 0;  // at the finest level, before subsampling: the overlap denominator
+
+  // Takes pixels with depth from levels finest..coarsest of `pyramid`. On the finest level,
+  // pixels with an intensity gradient under min_gradient are taken every other row and column.
+  void build(const ImagePyramid& pyramid, int finest, int coarsest, float min_gradient);
+};
+
+struct AlignmentResult {
+  // Maps keyframe-camera points into the current camera (= current_pose^-1 * keyframe_pose).
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  double overlap = 0.0;          // fraction of the keyframe's pixels that landed in the frame
+  double intensity_sigma = 0.0;  // robust std-dev of the intensity residual, finest level
+  double min_information = 0.0;  // smallest eigenvalue of the normalised Hessian, finest level
+  bool finite = false;
+};
+
+// Coarse-to-fine dense alignment of a frame to a keyframe (DVO, Kerl et al. 2013): minimises
+// intensity and depth differences of the keyframe's pixels warped into the frame, with Huber
+// weights on residuals normalised by their robust spread, by Gauss-Newton on SE(3) (left
+// increments). Forward compositional: the frame's gradients are sampled where each point lands,
+// from the interleaved samples the pyramid precomputes, so one lookup per point and step.
+class DenseAligner {
+ public:
+  explicit DenseAligner(const TrackingOptions& options) : options_(options) {}
+  AlignmentResult align(const AlignmentReference& reference, const ImagePyramid& current,
+                        const Eigen::Isometry3d& guess) const;
+
+ private:
+  TrackingOptions options_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,71 @@
+#pragma once
+
+#include <deque>
+#include <memory>
+
+#include "rgbdmap/base/tracking_options.hpp"
+#include "rgbdmap/tracking/dense_aligner.hpp"
+#include "rgbdmap/tracking/image_pyramid.hpp"
+#include "rgbdmap/tracking/pose_provider.hpp"
+#include "rgbdmap/tracking/relocaliser.hpp"
+
+namespace rgbdmap {
+
+// Camera tracking for sources without ground truth: every frame is aligned densely to the last
+// keyframe (frame-to-keyframe drifts less than chaining frame-to-frame estimates), starting from
+// a constant-velocity prediction. An estimate that fails a plausibility check (too little of the
+// keyframe in view, too little depth, a large residual, a jump no hand makes between two frames)
+// loses the frame: it keeps the predicted pose and is not mapped. While lost, each frame is
+// matched against recent keyframes (dense from the last good pose, then ORB + PnP refined
+// densely) until one passes the same checks. The first frame defines the world frame.
+class DenseTracker : public PoseProvider {
+ public:
+  DenseTracker(const CameraIntrinsics& camera, const TrackingOptions& options, float min_depth,
+               float max_depth);
+  ~DenseTracker() override;
+
+  bool estimate(Frame& frame) override;
+  std::string describe() const override;
+  TrackingState state() const override { return state_; }
+
+  std::uint64_t lostFrames() const { return lost_frames_; }
+  std::uint64_t relocalisations() const { return relocalisations_; }
+  std::uint64_t keyframes() const { return keyframes_made_; }
+  // Why the last lost frame was lost (e.g. "residual too large"), for logs and status lines.
+  const char* lossReason() const { return loss_reason_; }
+
+ private:
+  struct Keyframe {
+    AlignmentReference reference;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    RelocalisationView view;  // features for relocalisation
+  };
+  // Why an alignment was rejected, or nullptr when it is plausible.
+  const char* reject(const AlignmentResult& result, const Eigen::Isometry3d& pose,
+                     const Eigen::Isometry3d& predicted, double dt, bool check_jump) const;
+  void makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose);
+  bool relocalise(const Frame& frame, Eigen::Isometry3d& pose);
+  bool accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state);
+  bool lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why);
+
+  CameraIntrinsics camera_;
+  TrackingOptions options_;
+  float min_depth_, max_depth_;
+  DenseAligner aligner_;
+  ImagePyramid pyramid_;
+  Relocaliser relocaliser_;
+  std::deque<std::shared_ptr<Keyframe>> keyframes_;  // most recent last
+  std::shared_ptr<Keyframe> keyframe_;               // the one tracked against
+  AlignmentResult last_result_;
+  Eigen::Isometry3d last_pose_ = Eigen::Isometry3d::Identity();  // last good pose
+  Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();   // per frame, last good pair
+  double last_timestamp_ = 0.0;
+  double frame_period_ = 1.0 / 30.0;
+  bool started_ = false;
+  bool lost_ = false;
+  const char* loss_reason_ = "";
+  TrackingState state_ = TrackingState::kNoPose;
+  std::uint64_t lost_frames_ = 0, relocalisations_ = 0, keyframes_made_ = 0;
+};
+
+}  // namespace rgbdmap

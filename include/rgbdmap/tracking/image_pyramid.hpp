@@ -1,0 +1,54 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "rgbdmap/base/frame.hpp"
+
+namespace rgbdmap {
+
+// Pinhole intrinsics of one pyramid level (no distortion: tracking works on the raw image).
+struct LevelCamera {
+  int width = 0;
+  int height = 0;
+  float fx = 0, fy = 0, cx = 0, cy = 0;
+  LevelCamera halved() const;
+};
+
+// What the aligner samples from the frame being tracked, per pixel and interleaved so that one
+// bilinear lookup reads everything: intensity, its x/y gradient, depth, its x/y gradient.
+// Depth (and its gradient) is 0 where the depth or a neighbour needed for its gradient is
+// missing or across a depth edge, which keeps the geometric term off there.
+using PixelSample = Eigen::Matrix<float, 8, 1>;  // I, Ix, Iy, Z, Zx, Zy, unused, unused
+
+struct PyramidLevel {
+  LevelCamera camera;
+  cv::Mat gray;   // CV_32FC1, grey levels 0..255
+  cv::Mat depth;  // CV_32FC1, metres, 0 = missing
+  std::vector<PixelSample, Eigen::aligned_allocator<PixelSample>> samples;  // row-major
+};
+
+// A frame as the tracker sees it: grey and depth at halving resolutions. Buffers are reused
+// from frame to frame (build() writes in place).
+class ImagePyramid {
+ public:
+  // Fills levels first..levels-1 from a BGR colour and a depth image in metres; depth outside
+  // [min_depth, max_depth] counts as missing. With `undistort` and a camera with lens
+  // distortion, level `first` is resampled straight from the raw images to an ideal pinhole
+  // camera (so the 3-D points and the projection agree everywhere in the image).
+  void build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
+             bool undistort, float min_depth, float max_depth);
+  int levels() const { return static_cast<int>(levels_.size()); }
+  const PyramidLevel& level(int i) const { return levels_[static_cast<std::size_t>(i)]; }
+  // Fraction of full-resolution pixels with a usable depth.
+  double depthFraction() const { return depth_fraction_; }
+
+ private:
+  std::vector<PyramidLevel> levels_;
+  double depth_fraction_ = 0.0;
+  cv::Mat gray8_, map_x_, map_y_, raw_;  // reused buffers; the undistortion maps
+  cv::Size map_for_;
+};
+
+}  // namespace rgbdmap

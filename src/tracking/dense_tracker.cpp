@@ -1,0 +1,178 @@
+#include "rgbdmap/tracking/dense_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rgbdmap {
+namespace {
+
+double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+
+// The motion t scaled to a fraction s of itself (rotation angle and translation), e.g. the
+// per-frame share of a motion over several frame periods.
+Eigen::Isometry3d scaled(const Eigen::Isometry3d& t, double s) {
+  const Eigen::AngleAxisd aa(t.linear());
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix();
+  out.translation() = t.translation() * s;
+  return out;
+}
+
+// The rotation part re-orthonormalised, so rounding never accumulates into a non-rigid pose.
+Eigen::Isometry3d rigid(const Eigen::Isometry3d& t) {
+  Eigen::Isometry3d out = t;
+  out.linear() = Eigen::Quaterniond(t.linear()).normalized().toRotationMatrix();
+  return out;
+}
+
+}  // namespace
+
+DenseTracker::DenseTracker(const CameraIntrinsics& camera, const TrackingOptions& options,
+                           float min_depth, float max_depth)
+    : camera_(camera),
+      options_(options),
+      min_depth_(min_depth),
+      max_depth_(max_depth),
+      aligner_(options),
+      relocaliser_(camera, options.relocalisation_min_inliers, min_depth, max_depth) {}
+
+DenseTracker::~DenseTracker() = default;
+
+std::string DenseTracker::describe() const {
+  return "dense RGB-D tracking against keyframes (pyramid levels " +
+         std::to_string(options_.coarsest_level) + ".." + std::to_string(options_.finest_level) +
+         ")";
+}
+
+const char* DenseTracker::reject(const AlignmentResult& result, const Eigen::Isometry3d& pose,
+                                 const Eigen::Isometry3d& predicted, double periods,
+                                 bool check_jump) const {
+  if (!result.finite || !pose.matrix().allFinite()) return "estimate is not finite";
+  if ((pose.linear().transpose() * pose.linear() - Eigen::Matrix3d::Identity())
+          .cwiseAbs()
+          .maxCoeff() > 1e-3)
+    return "estimate is not a rigid motion";
+  if (result.overlap < options_.min_overlap) return "too little of the keyframe in view";
+  if (result.intensity_sigma > options_.max_residual) return "residual too large";
+  if (check_jump) {
+    const Eigen::Isometry3d jump = predicted.inverse() * pose;
+    if (jump.translation().norm() > options_.max_jump_translation * periods ||
+        angle(jump) > options_.max_jump_rotation * periods)
+      return "jump from the predicted pose";
+  }
+  return nullptr;
+}
+
+void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose) {
+  auto keyframe = std::make_shared<Keyframe>();
+  keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
+                            static_cast<float>(options_.min_gradient));
+  keyframe->pose = pose;
+  relocaliser_.remember(frame, keyframe->view);
+  keyframes_.push_back(keyframe);
+  while (static_cast<int>(keyframes_.size()) > std::max(1, options_.relocalisation_keyframes))
+    keyframes_.pop_front();
+  keyframe_ = keyframe;
+  ++keyframes_made_;
+}
+
+bool DenseTracker::accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state) {
+  frame.pose = pose;
+  frame.has_pose = true;
+  last_pose_ = pose;
+  state_ = state;
+  lost_ = false;
+  return true;
+}
+
+bool DenseTracker::lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why) {
+  loss_reason_ = why;
+  frame.pose = predicted;
+  frame.has_pose = false;
+  state_ = TrackingState::kLost;
+  lost_ = true;
+  ++lost_frames_;
+  return false;
+}
+
+bool DenseTracker::estimate(Frame& frame) {
+  const int levels = options_.coarsest_level + 1;
+  pyramid_.build(frame, camera_, levels, options_.finest_level, options_.undistort, min_depth_,
+                 max_depth_);
+  const bool enough_depth = pyramid_.depthFraction() >= options_.min_depth_fraction;
+  if (!started_) {
+    last_timestamp_ = frame.timestamp;
+    // Nothing to track against yet: the first frame with depth starts the world frame.
+    if (!enough_depth) return lose(frame, Eigen::Isometry3d::Identity(), "no depth");
+    started_ = true;
+    makeKeyframe(frame, Eigen::Isometry3d::Identity());
+    velocity_.setIdentity();
+    return accept(frame, Eigen::Isometry3d::Identity(), TrackingState::kTracked);
+  }
+  // Frame periods since the last frame (more than one when frames were dropped or cut out).
+  const double dt = frame.timestamp - last_timestamp_;
+  last_timestamp_ = frame.timestamp;
+  const double periods = std::clamp(std::round(dt / frame_period_), 1.0, 30.0);
+  Eigen::Isometry3d predicted = last_pose_;
+  for (int i = 0; i < static_cast<int>(periods); ++i) predicted = predicted * velocity_;
+  predicted = rigid(predicted);
+
+  if (lost_) {
+    Eigen::Isometry3d pose;
+    if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_, "lost");
+    velocity_.setIdentity();
+    ++relocalisations_;
+    return accept(frame, pose, TrackingState::kRelocalised);
+  }
+
+  last_result_ =
+      aligner_.align(keyframe_->reference, pyramid_, rigid(predicted.inverse() * keyframe_->pose));
+  const Eigen::Isometry3d pose = rigid(keyframe_->pose * last_result_.motion.inverse());
+  if (const char* why = reject(last_result_, pose, predicted, periods, true)) {
+    velocity_.setIdentity();
+    return lose(frame, predicted, why);
+  }
+  velocity_ = scaled(last_pose_.inverse() * pose, 1.0 / periods);
+  if (!enough_depth) {
+    // The image tracks but the frame has (almost) no depth: nothing to map. Its pose is good, so
+    // tracking goes on from it, but the next good frame reports the recovery.
+    last_pose_ = pose;
+    return lose(frame, pose, "no depth");
+  }
+  accept(frame, pose, TrackingState::kTracked);
+  const Eigen::Isometry3d from_keyframe = keyframe_->pose.inverse() * pose;
+  if (from_keyframe.translation().norm() > options_.keyframe_translation ||
+      angle(from_keyframe) > options_.keyframe_rotation ||
+      last_result_.overlap < options_.keyframe_min_overlap)
+    makeKeyframe(frame, pose);
+  return true;
+}
+
+bool DenseTracker::relocalise(const Frame& frame, Eigen::Isometry3d& pose) {
+  // First the cheap way: the camera is often near where it was lost (a blank or bad frame).
+  const Eigen::Isometry3d from_last = rigid(last_pose_.inverse() * keyframe_->pose);
+  AlignmentResult result = aligner_.align(keyframe_->reference, pyramid_, from_last);
+  pose = rigid(keyframe_->pose * result.motion.inverse());
+  if (!reject(result, pose, last_pose_, 1.0, true)) return true;
+
+  // Then features, newest keyframe first; the dense aligner refines what PnP finds.
+  relocaliser_.prepare(frame);
+  for (auto it = keyframes_.rbegin(); it != keyframes_.rend(); ++it) {
+    Keyframe& keyframe = **it;
+    const std::optional<Eigen::Isometry3d> found = relocaliser_.locate(keyframe.view);
+    if (!found) continue;
+    result = aligner_.align(keyframe.reference, pyramid_, *found);
+    pose = rigid(keyframe.pose * result.motion.inverse());
+    // PnP and the dense refinement must agree: two independent methods on one wrong answer
+    // are unlikely.
+    const Eigen::Isometry3d change = found->inverse() * result.motion;
+    if (reject(result, pose, pose, 1.0, false) || change.translation().norm() > 0.05 ||
+        angle(change) > 0.09)
+      continue;
+    keyframe_ = *it;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace rgbdmap

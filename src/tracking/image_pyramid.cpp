@@ -1,0 +1,142 @@
+#include "rgbdmap/tracking/image_pyramid.hpp"
+
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace rgbdmap {
+namespace {
+
+// Mean of the valid depths of each 2x2 block, if they agree (a block straddling a depth edge
+// would otherwise invent a surface between the two).
+void halveDepth(const cv::Mat& in, cv::Mat& out) {
+  out.create(in.rows / 2, in.cols / 2, CV_32FC1);
+  for (int y = 0; y < out.rows; ++y) {
+    const float* a = in.ptr<float>(2 * y);
+    const float* b = in.ptr<float>(2 * y + 1);
+    float* o = out.ptr<float>(y);
+    for (int x = 0; x < out.cols; ++x) {
+      const float d[4] = {a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]};
+      float sum = 0, lo = 1e9f, hi = 0;
+      int n = 0;
+      for (float v : d)
+        if (v > 0) {
+          sum += v;
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+          ++n;
+        }
+      o[x] = (n > 0 && hi - lo < 0.05f * lo) ? sum / static_cast<float>(n) : 0.0f;
+    }
+  }
+}
+
+// Depth gradient by central differences; 0 where a neighbour is missing or across an edge.
+bool depthGradient(const float* up, const float* row, const float* down, int x, float& zx,
+                   float& zy) {
+  const float z = row[x], l = row[x - 1], r = row[x + 1], u = up[x], d = down[x];
+  if (z <= 0 || l <= 0 || r <= 0 || u <= 0 || d <= 0) return false;
+  const float edge = 0.04f * z;
+  if (std::abs(r - l) > edge || std::abs(d - u) > edge) return false;
+  zx = 0.5f * (r - l);
+  zy = 0.5f * (d - u);
+  return true;
+}
+
+void computeSamples(PyramidLevel& level) {
+  const int w = level.gray.cols, h = level.gray.rows;
+  level.samples.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h),
+                       PixelSample::Zero());
+  for (int y = 1; y + 1 < h; ++y) {
+    const float* g0 = level.gray.ptr<float>(y - 1);
+    const float* g1 = level.gray.ptr<float>(y);
+    const float* g2 = level.gray.ptr<float>(y + 1);
+    const float* d0 = level.depth.ptr<float>(y - 1);
+    const float* d1 = level.depth.ptr<float>(y);
+    const float* d2 = level.depth.ptr<float>(y + 1);
+    PixelSample* s = &level.samples[static_cast<std::size_t>(y) * static_cast<std::size_t>(w)];
+    for (int x = 1; x + 1 < w; ++x) {
+      PixelSample& p = s[x];
+      p[0] = g1[x];
+      p[1] = 0.5f * (g1[x + 1] - g1[x - 1]);
+      p[2] = 0.5f * (g2[x] - g0[x]);
+      float zx = 0, zy = 0;
+      if (depthGradient(d0, d1, d2, x, zx, zy)) {
+        p[3] = d1[x];
+        p[4] = zx;
+        p[5] = zy;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+LevelCamera LevelCamera::halved() const {
+  // Pixel centres: x_half = (x + 0.5) / 2 - 0.5.
+  return {width / 2, height / 2, fx / 2, fy / 2, (cx + 0.5f) / 2 - 0.5f, (cy + 0.5f) / 2 - 0.5f};
+}
+
+void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
+                         bool undistort, float min_depth, float max_depth) {
+  levels_.resize(static_cast<std::size_t>(levels));
+  LevelCamera full{frame.depth.cols,
+                   frame.depth.rows,
+                   static_cast<float>(camera.fx),
+                   static_cast<float>(camera.fy),
+                   static_cast<float>(camera.cx),
+                   static_cast<float>(camera.cy)};
+  LevelCamera at_first = full;
+  for (int i = 0; i < first; ++i) at_first = at_first.halved();
+  cv::cvtColor(frame.color, gray8_, cv::COLOR_BGR2GRAY);
+  PyramidLevel& base = levels_[static_cast<std::size_t>(first)];
+  base.camera = at_first;
+  if (undistort && camera.hasDistortion()) {
+    const cv::Size size(at_first.width, at_first.height);
+    if (map_for_ != size) {
+      const cv::Matx33d K(at_first.fx, 0, at_first.cx, 0, at_first.fy, at_first.cy, 0, 0, 1);
+      cv::initUndistortRectifyMap(camera.cameraMatrix(), camera.distortion(), cv::noArray(), K,
+                                  size, CV_32FC1, map_x_, map_y_);
+      map_for_ = size;
+    }
+    cv::remap(gray8_, raw_, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    raw_.convertTo(base.gray, CV_32F);
+    // Depth is not interpolated across the image: nearest sample, or a missing one.
+    cv::remap(frame.depth, base.depth, map_x_, map_y_, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+              cv::Scalar(0));
+  } else {
+    PyramidLevel& level0 = levels_[0];
+    level0.camera = full;
+    gray8_.convertTo(level0.gray, CV_32F);
+    frame.depth.copyTo(level0.depth);
+    for (int i = 1; i <= first; ++i) {
+      PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
+      PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
+      coarse.camera = fine.camera.halved();
+      cv::resize(fine.gray, coarse.gray, cv::Size(fine.gray.cols / 2, fine.gray.rows / 2), 0, 0,
+                 cv::INTER_AREA);
+      halveDepth(fine.depth, coarse.depth);
+    }
+  }
+  int valid = 0;
+  for (int y = 0; y < base.depth.rows; ++y) {
+    float* d = base.depth.ptr<float>(y);
+    for (int x = 0; x < base.depth.cols; ++x) {
+      const bool ok = d[x] >= min_depth && d[x] <= max_depth;  // also false for NaN
+      if (!ok) d[x] = 0.0f;
+      valid += ok;
+    }
+  }
+  depth_fraction_ = static_cast<double>(valid) / static_cast<double>(base.depth.total());
+  for (int i = first + 1; i < levels; ++i) {
+    PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
+    PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
+    coarse.camera = fine.camera.halved();
+    cv::resize(fine.gray, coarse.gray, cv::Size(fine.gray.cols / 2, fine.gray.rows / 2), 0, 0,
+               cv::INTER_AREA);
+    halveDepth(fine.depth, coarse.depth);
+  }
+  for (int i = first; i < levels; ++i) computeSamples(levels_[static_cast<std::size_t>(i)]);
+}
+
+}  // namespace rgbdmap

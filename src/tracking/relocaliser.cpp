@@ -1,0 +1,95 @@
+#include "rgbdmap/tracking/relocaliser.hpp"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace rgbdmap {
+
+Relocaliser::Relocaliser(const CameraIntrinsics& camera, int min_inliers, float min_depth,
+                         float max_depth)
+    : camera_(camera),
+      min_inliers_(min_inliers),
+      min_depth_(min_depth),
+      max_depth_(max_depth),
+      orb_(cv::ORB::create(800)),
+      matcher_(cv::DescriptorMatcher::create(cv::DescriptorMatcher::BRUTEFORCE_HAMMING)) {}
+
+void Relocaliser::remember(const Frame& frame, RelocalisationView& view) const {
+  cv::cvtColor(frame.color, view.gray, cv::COLOR_BGR2GRAY);
+  frame.depth.copyTo(view.depth);
+  view.described = false;
+  view.points.clear();
+  view.descriptors.release();
+}
+
+void Relocaliser::describe(RelocalisationView& view) {
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  orb_->detectAndCompute(view.gray, cv::noArray(), keypoints, descriptors);
+  std::vector<cv::Point2f> pixels;
+  std::vector<int> rows;
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::Point2f& p = keypoints[i].pt;
+    const float z = view.depth.at<float>(cvRound(p.y), cvRound(p.x));
+    if (!(z >= min_depth_ && z <= max_depth_)) continue;
+    pixels.push_back(p);
+    rows.push_back(static_cast<int>(i));
+  }
+  view.points.clear();
+  view.descriptors.release();
+  if (!pixels.empty()) {
+    // Rays through the undistorted pixel positions (the lens distorts the image, not depth).
+    std::vector<cv::Point2f> rays;
+    cv::undistortPoints(pixels, rays, camera_.cameraMatrix(), camera_.distortion());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const float z = view.depth.at<float>(cvRound(pixels[i].y), cvRound(pixels[i].x));
+      view.points.emplace_back(rays[i].x * z, rays[i].y * z, z);
+      view.descriptors.push_back(descriptors.row(rows[i]));
+    }
+  }
+  view.described = true;
+}
+
+void Relocaliser::prepare(const Frame& frame) {
+  cv::Mat gray;
+  cv::cvtColor(frame.color, gray, cv::COLOR_BGR2GRAY);
+  current_keypoints_.clear();
+  orb_->detectAndCompute(gray, cv::noArray(), current_keypoints_, current_descriptors_);
+}
+
+std::optional<Eigen::Isometry3d> Relocaliser::locate(RelocalisationView& keyframe) {
+  if (!keyframe.described) describe(keyframe);
+  if (keyframe.descriptors.rows < min_inliers_ || current_descriptors_.rows < min_inliers_)
+    return std::nullopt;
+  // Lowe's ratio test on the two nearest neighbours keeps distinctive matches only.
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher_->knnMatch(keyframe.descriptors, current_descriptors_, knn, 2);
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+  for (const auto& m : knn) {
+    if (m.size() < 2 || m[0].distance > 0.8f * m[1].distance) continue;
+    object.push_back(keyframe.points[static_cast<std::size_t>(m[0].queryIdx)]);
+    image.push_back(current_keypoints_[static_cast<std::size_t>(m[0].trainIdx)].pt);
+  }
+  if (static_cast<int>(object.size()) < min_inliers_) return std::nullopt;
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  if (!cv::solvePnPRansac(object, image, camera_.cameraMatrix(), camera_.distortion(), rvec, tvec,
+                          false, 200, 3.0f, 0.99, inliers, cv::SOLVEPNP_EPNP) ||
+      static_cast<int>(inliers.size()) < min_inliers_)
+    return std::nullopt;
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  cv::cv2eigen(R, r);
+  cv::cv2eigen(tvec, t);
+  if (!r.allFinite() || !t.allFinite()) return std::nullopt;
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = r;
+  motion.translation() = t;
+  return motion;
+}
+
+}  // namespace rgbdmap
