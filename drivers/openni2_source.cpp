@@ -74,6 +74,7 @@ class OpenNI2Source : public FrameSource {
   CameraIntrinsics camera_;
   int depth_total_ = 0;  // frames in a recording (0 = unknown)
   int color_total_ = 0;
+  bool repeats_ = false;  // a recording that loops never ends by its frame count
   int depth_read_ = 0;
   int color_read_ = 0;
   bool ended_ = false;
@@ -102,6 +103,7 @@ void OpenNI2Source::open(const std::string& uri, bool diagnose) {
   name_ = dev_->name();
   depth_total_ = dev_->depthTotal();
   color_total_ = dev_->colorTotal();
+  repeats_ = dev_->repeats();
   depth_read_ = color_read_ = 0;
   ended_ = false;
   paced_ = false;
@@ -186,7 +188,8 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
       frame.timestamp = static_cast<double>(ref.getTimestamp()) * 1e-6;  // device clock, µs
     }
   }
-  if (is_file_ && (depth_read_ >= depth_total_ || color_read_ >= color_total_)) ended_ = true;
+  if (is_file_ && !repeats_ && (depth_read_ >= depth_total_ || color_read_ >= color_total_))
+    ended_ = true;
   if (wrong_size) {
     spdlog::warn("{}: skipping a frame of {}x{} (depth) / {}x{} (colour); the camera is {}x{}",
                  label(), dev_->depthFrame().getWidth(), dev_->depthFrame().getHeight(),

@@ -200,10 +200,18 @@ void OpenDevice::setUpPlayback() {
     throw InputError(label_ + ": OpenNI2 gives no playback control for this recording");
   if (playback->setSpeed(-1.0f) != openni::STATUS_OK)
     spdlog::warn("{}: cannot play frame by frame ({}); frames may be skipped", label_, lastError());
-  if (playback->setRepeatEnabled(false) != openni::STATUS_OK)
+  // A .oni file plays once; other devices that play like recordings (a TUM folder through the
+  // project's driver) repeat as their URI says (loop=1).
+  const std::string suffix = ".oni";
+  const bool oni_file =
+      requested_.size() >= suffix.size() &&
+      requested_.compare(requested_.size() - suffix.size(), suffix.size(), suffix) == 0;
+  if (oni_file && playback->setRepeatEnabled(false) != openni::STATUS_OK)
     spdlog::warn(
         "{}: cannot turn off repeating ({}); the recording ends after {} s without a frame", label_,
         lastError(), kReadTimeout.count() / 1000.0);
+  repeats_ = !oni_file && playback->getRepeatEnabled();
+  if (repeats_) spdlog::info("{}: plays in a loop until stopped", label_);
   depth_total_ = std::max(playback->getNumberOfFrames(depth_), 0);
   color_total_ = std::max(playback->getNumberOfFrames(color_), 0);
   if (depth_total_ == 0 || color_total_ == 0)

@@ -44,6 +44,7 @@ class OpenDevice {
   const CameraIntrinsics& intrinsics() const { return camera_; }
   int depthTotal() const { return depth_total_; }  // frames in a recording (0 = unknown)
   int colorTotal() const { return color_total_; }
+  bool repeats() const { return repeats_; }  // a recording that starts over at its end
   // Set once OpenNI2 reports this device unplugged (null when it cannot tell).
   const DisconnectWatch* watch() const { return watch_.get(); }
 
@@ -86,6 +87,7 @@ class OpenDevice {
   CameraIntrinsics camera_;
   int depth_total_ = 0;
   int color_total_ = 0;
+  bool repeats_ = false;
 };
 
 }  // namespace rgbdmap::openni2
