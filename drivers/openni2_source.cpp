@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "openni2/open_device.hpp"
+#include "openni2/reconnect_backoff.hpp"
 #include "openni2/runtime.hpp"
 #include "rgbdmap/base/error.hpp"
 
@@ -20,9 +21,11 @@ using Clock = std::chrono::steady_clock;
 using openni2::kReadTimeout;
 using openni2::OpenDevice;
 
-// How long one reconnect() keeps trying to reopen the device.
-constexpr std::chrono::milliseconds kReconnectWindow{1000};
-constexpr std::chrono::milliseconds kReconnectRetry{200};
+// Reopening a camera that went away: at once, then after 0.5 s, 1 s, 2 s, 4 s, 5 s, 5 s...;
+// reconnect() returns at least this often while it waits.
+constexpr std::chrono::milliseconds kReconnectFirstDelay{500};
+constexpr std::chrono::milliseconds kReconnectLongestDelay{5000};
+constexpr std::chrono::milliseconds kReconnectPoll{250};
 
 // Reads paired depth and colour frames from an OpenNI2 device or recording, reopens a device
 // that went away.
@@ -70,6 +73,7 @@ class OpenNI2Source : public FrameSource {
   bool open_ = false;
   bool ever_opened_ = false;
   std::unique_ptr<OpenDevice> dev_;  // null while closed
+  openni2::ReconnectBackoff backoff_{kReconnectFirstDelay, kReconnectLongestDelay};
 
   CameraIntrinsics camera_;
   int depth_total_ = 0;  // frames in a recording (0 = unknown)
@@ -200,6 +204,7 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
   }
   frame.has_pose = false;
   frame.origin = label();
+  backoff_.reset();  // frames flow: the next outage starts backing off afresh
   if (is_file_ && rate_ > 0) pace(frame.timestamp);
   return ReadStatus::kFrame;
 }
@@ -218,27 +223,33 @@ void OpenNI2Source::pace(double stamp) {
 }
 
 bool OpenNI2Source::reconnect() {
-  close();
+  if (open_) close();
+  // Returns within kReconnectPoll while waiting for the next attempt, so the caller can stop.
+  Clock::time_point now = Clock::now();
+  if (!backoff_.due(now)) {
+    std::this_thread::sleep_for(std::min<Clock::duration>(backoff_.next() - now, kReconnectPoll));
+    now = Clock::now();
+    if (!backoff_.due(now)) return false;
+  }
   // A replugged camera may get a new USB address and URI; when the user asked
   // for "the first camera", any camera will do.
   std::vector<std::string> candidates{reopen_uri_};
   if (requested_.empty()) candidates.push_back("");
-  const Clock::time_point give_up = Clock::now() + kReconnectWindow;
   std::string last_error;
-  for (;;) {
-    for (const std::string& uri : candidates) {
-      try {
-        open(uri, false);
-        spdlog::info("{}: reopened", label());
-        return true;
-      } catch (const InputError& e) {
-        last_error = e.what();
-      }
+  for (const std::string& uri : candidates) {
+    try {
+      open(uri, false);
+      backoff_.succeeded();
+      spdlog::info("{}: reopened (reopen attempt {})", label(), backoff_.attempts());
+      return true;
+    } catch (const InputError& e) {
+      last_error = e.what();
     }
-    if (Clock::now() + kReconnectRetry >= give_up) break;
-    std::this_thread::sleep_for(kReconnectRetry);
   }
-  spdlog::debug("openni2:{}: not back yet: {}", reopen_uri_, last_error);
+  backoff_.failed(now);
+  spdlog::info("openni2:{}: not back yet (reopen attempt {}: {}); next attempt in {:.1f} s",
+               reopen_uri_, backoff_.attempts(), last_error,
+               std::chrono::duration<double>(backoff_.next() - now).count());
   return false;
 }
 

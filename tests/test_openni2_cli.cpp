@@ -64,6 +64,23 @@ void expectCompleteRecording(const std::string& dir, std::size_t expected_frames
 
 bool cameraAttached() { return scanUsbCameras().anyCamera(); }
 
+std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t count = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
+  return count;
+}
+
+// Waits (polling, up to `timeout_s`) until the log at `path` contains `text` `count` times.
+bool waitForLog(const std::string& path, const std::string& text, double timeout_s,
+                std::size_t count = 1) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (occurrences(test::readFile(path), text) >= count) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return false;
+}
+
 // `env -i` with only the sanitizers' settings kept: what a user's shell with no OpenNI2 or
 // library-path setup gives a program.
 std::vector<std::string> cleanEnvironment() {
@@ -286,7 +303,10 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
                      "--stats", dir + "/stats.json", "--no-render", "-q"},
                     dir + "/map.log");
   unsetenv("LD_LIBRARY_PATH");
-  std::this_thread::sleep_for(std::chrono::seconds(6));
+  // Unplugged after 12 and 24 frames; the third stop is the end of the folder (a live camera
+  // then waits for more).
+  EXPECT_TRUE(waitForLog(dir + "/map.log", "camera stopped delivering frames", 120, 3))
+      << test::readFile(dir + "/map.log");
   map.signal(SIGINT);
   const int code = map.wait(60);
   const std::string log = test::readFile(dir + "/map.log");
@@ -385,6 +405,42 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
   }
   EXPECT_GE(same, static_cast<std::size_t>(0.999 * static_cast<double>(b.size())))
       << same << " of " << b.size() << " points agree";
+}
+
+// A camera that stays away for 10 s is waited for with backed-off reopen attempts (not one
+// every 200 ms) and costs one checkpoint, not one per attempt.
+TEST(OpenNI2Cli, ACameraAwayForTenSecondsCostsAFewReopenAttemptsAndOneCheckpoint) {
+  if (privateOpenNI2Runtime().empty()) GTEST_SKIP() << "the OpenNI2 TUM driver plugin is not built";
+  const std::string dir = test::freshDir();
+  const std::string uri =
+      "tum:" + test::tumDir(kXyz) + "?disconnect_after=10&reconnect_after_ms=10000";
+  std::vector<std::string> command = cleanEnvironment();
+  for (const std::string& arg :
+       {test::binary(), std::string("--source"), "openni2:" + uri, std::string("--out"),
+        dir + "/map.pcd", std::string("--set"), std::string("checkpoint.every_seconds=0"),
+        std::string("--set"), std::string("checkpoint.every_keyframes=0"),
+        std::string("--no-render"), std::string("-q")})
+    command.push_back(arg);
+  test::Process map(command, dir + "/map.log");
+  ASSERT_TRUE(waitForLog(dir + "/map.log", "camera stopped delivering frames", 120))
+      << test::readFile(dir + "/map.log");
+  ASSERT_TRUE(waitForLog(dir + "/map.log", "camera is back", 120))
+      << test::readFile(dir + "/map.log");
+  map.signal(SIGINT);
+  ASSERT_EQ(map.wait(120), 0) << test::readFile(dir + "/map.log");
+  const std::string log = test::readFile(dir + "/map.log");
+  const std::size_t away = log.find("camera stopped delivering frames");
+  const std::size_t back = log.find("camera is back");
+  ASSERT_LT(away, back) << log;
+  const std::string outage = log.substr(away, back - away);
+  // At once, then after 0.5, 1, 2, 4 and 5 s: the sixth attempt (12.5 s) finds it back; a
+  // slow machine may fit one more attempt in before the driver's 10 s are up.
+  const std::size_t attempts = occurrences(outage, "reopen attempt");
+  EXPECT_GE(attempts, 3u) << outage;
+  EXPECT_LE(attempts, 7u) << outage;
+  EXPECT_EQ(occurrences(outage, "map checkpointed"), 1u) << outage;
+  // The checkpoint line is logged by the writer thread: count those up to the reopen.
+  EXPECT_EQ(occurrences(log.substr(0, back), "checkpoint: "), 1u) << log;
 }
 
 }  // namespace
