@@ -275,4 +275,24 @@ std::vector<std::string> listOpenNI2Devices() {
   return list;
 }
 
+std::string openNI2CameraModel(const std::string& uri) {
+  try {
+    const std::shared_ptr<openni2::Runtime> runtime = openni2::Runtime::acquire();
+    openni::Array<openni::DeviceInfo> devices;
+    openni::OpenNI::enumerateDevices(&devices);
+    for (int i = 0; i < devices.getSize(); ++i) {
+      const openni::DeviceInfo& info = devices[i];
+      if (!uri.empty() && uri != info.getUri()) continue;
+      const std::string name = std::string(info.getVendor()) + " " + info.getName();
+      const bool primesense =
+          info.getUsbVendorId() == 0x1d27 || name.find("PrimeSense") != std::string::npos ||
+          name.find("Xtion") != std::string::npos || name.find("Carmine") != std::string::npos;
+      return primesense ? "xtion" : "kinect_v1";
+    }
+  } catch (const InputError&) {
+    // OpenNI2 cannot start: opening the source will say so.
+  }
+  return "";
+}
+
 }  // namespace rgbdmap

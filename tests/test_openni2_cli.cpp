@@ -445,3 +445,20 @@ TEST(OpenNI2Cli, ACameraAwayForTenSecondsCostsAFewReopenAttemptsAndOneCheckpoint
 
 }  // namespace
 }  // namespace rgbdmap
+
+namespace rgbdmap {
+namespace {
+
+TEST(OpenNI2Cli, PresetFollowsTheCamera) {
+  // A TUM folder through the OpenNI2 driver is the folder's camera; a recording a Kinect's.
+  EXPECT_EQ(presetForSource("openni2:tum:" + test::tumDir(kXyz)), "tum_fr1");
+  EXPECT_EQ(presetForSource("openni2:tum:" + test::tumDir(kXyz) + "?loop=1"), "tum_fr1");
+  EXPECT_EQ(presetForSource("openni2:" + oniFile()), "kinect_v1");
+  // No camera attached: the Kinect preset (the message about the missing camera comes later).
+  if (!cameraAttached()) {
+    EXPECT_EQ(presetForSource("openni2"), "kinect_v1");
+  }
+}
+
+}  // namespace
+}  // namespace rgbdmap
