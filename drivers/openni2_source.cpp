@@ -26,6 +26,8 @@ using openni2::OpenDevice;
 constexpr std::chrono::milliseconds kReconnectFirstDelay{500};
 constexpr std::chrono::milliseconds kReconnectLongestDelay{5000};
 constexpr std::chrono::milliseconds kReconnectPoll{250};
+// Depth and colour of one moment: TUM's association rule (0.02 s), over half a 30 fps frame.
+constexpr std::int64_t kPairingToleranceUs = 20000;
 
 // Reads paired depth and colour frames from an OpenNI2 device or recording, reopens a device
 // that went away.
@@ -137,6 +139,8 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
   bool have_depth = false;
   bool have_color = false;
   bool wrong_size = false;
+  std::uint64_t depth_stamp = 0;  // device clock, µs
+  std::uint64_t color_stamp = 0;
   const Clock::time_point deadline = Clock::now() + kReadTimeout;
   while (!have_depth || !have_color) {
     if (dev_->watch() && dev_->watch()->disconnected()) {
@@ -176,6 +180,7 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
     if (ready == 0) {
       ++depth_read_;
       have_depth = true;
+      depth_stamp = ref.getTimestamp();
       if (wrong_size) continue;
       // In place: the Frame's images keep their buffers (same size and type
       // every time).
@@ -185,11 +190,23 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
     } else {
       ++color_read_;
       have_color = true;
+      color_stamp = ref.getTimestamp();
       if (wrong_size) continue;
       const cv::Mat rgb(height, width, CV_8UC3, const_cast<void*>(ref.getData()),
                         static_cast<std::size_t>(ref.getStrideInBytes()));
       cv::cvtColor(rgb, frame.color, cv::COLOR_RGB2BGR);
       frame.timestamp = static_cast<double>(ref.getTimestamp()) * 1e-6;  // device clock, µs
+    }
+    // A live camera's depth and colour are paired by their stamps, not by trusting frame sync
+    // (which not every driver offers): the older of two frames too far apart is read again.
+    if (!is_file_ && have_depth && have_color && !wrong_size) {
+      const std::int64_t gap =
+          static_cast<std::int64_t>(depth_stamp) - static_cast<std::int64_t>(color_stamp);
+      if (gap > kPairingToleranceUs) {
+        have_color = false;
+      } else if (-gap > kPairingToleranceUs) {
+        have_depth = false;
+      }
     }
   }
   if (is_file_ && !repeats_ && (depth_read_ >= depth_total_ || color_read_ >= color_total_))
