@@ -216,12 +216,12 @@ TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
 TEST(OpenNI2Cli, RecordStopsCleanlyOnSigintWithCompleteLists) {
   const std::string base = test::freshDir();
   const std::string dir = base + "/interrupted";
-  // At the recorded speed the 100 frames take about 3.3 s; interrupt after
-  // about one.
+  // At the recorded speed the 100 frames take about 3.3 s; interrupt once six
+  // are listed (three comment lines come first).
   test::Process record({test::binary(), "record", "--source", "tum:" + test::tumDir(kRpy), "--out",
                         dir, "--set", "replay.rate=1"},
                        base + "/record.log");
-  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  EXPECT_TRUE(waitForLog(dir + "/rgb.txt", ".png", 120, 6)) << test::readFile(base + "/record.log");
   record.signal(SIGINT);
   const int code = record.wait(30);
   const std::string log = test::readFile(base + "/record.log");
