@@ -226,9 +226,11 @@ void TumDevice::play() {
     const std::optional<VirtualCamera::Shot> shot = camera_->peek(generation_);
     lock.lock();
     if (!shot) {
-      // The end of a sequence that does not loop, or unplugged: nothing will come any more.
-      state_changed_.wait(lock, [this] { return closing_; });
-      return;
+      // The end of a sequence that does not loop, or unplugged: nothing comes until a seek or
+      // a restart (a new run).
+      state_changed_.wait(lock, [this, run] { return closing_ || runs_ != run; });
+      if (closing_) return;
+      continue;
     }
     if (!timed) {
       run_start = Clock::now() + kFirstFrameDelay;
@@ -261,11 +263,15 @@ void TumDevice::play() {
     if (closing_) return;
     if (runs_ != run || running_streams_ == 0) continue;
     first_of_run = false;
-    reads_due_ = reads_ + static_cast<std::uint64_t>(running_streams_);
+    // In manual mode the next pair waits until the host asks for more (it waits for a frame
+    // and none is left); a pair that could not be decoded is not waited for.
+    const std::uint64_t reads_before = reads_;
+    bool delivered = false;
     lock.unlock();
     std::string error;
     if (camera_->take(*shot, frame, error)) {
       deliver(frame, *shot);
+      delivered = true;
       if (camera_->countDelivered(generation_)) {
         log_.info(std::string(camera_->info().uri) + ": unplugged after " +
                   std::to_string(camera_->uri().disconnect_after) + " frames");
@@ -275,6 +281,7 @@ void TumDevice::play() {
       log_.warning("skipping frame " + std::to_string(shot->frame_index) + ": " + error);
     }
     lock.lock();
+    reads_due_ = delivered ? reads_before + 1 : reads_;
   }
 }
 

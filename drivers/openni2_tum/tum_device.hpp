@@ -41,8 +41,8 @@ class TumDevice : public oni::driver::DeviceBase, private StreamHost {
   OniBool isImageRegistrationModeSupported(OniImageRegistrationMode mode) override;
   OniStatus invoke(int command, void* data, int size) override;
   OniBool isCommandSupported(int command) override;
-  // Called by OpenNI2 for every frame the host reads: at playback speed <= 0 ("manual") the next
-  // pair comes once every running stream has read the last one.
+  // Called by OpenNI2 when the host waits for a frame and none is there: at playback speed
+  // <= 0 ("manual") the next pair comes then.
   OniStatus tryManualTrigger() override;
 
  private:
@@ -75,8 +75,8 @@ class TumDevice : public oni::driver::DeviceBase, private StreamHost {
   std::uint64_t runs_ = 0;  // times the first stream started: each restarts the time base
   bool closing_ = false;
   float speed_ = 1.0f;           // playback speed: a ratio of the recorded timing, <= 0 manual
-  std::uint64_t reads_ = 0;      // frames the host read (tryManualTrigger calls)
-  std::uint64_t reads_due_ = 0;  // in manual mode, the next pair waits for this many reads
+  std::uint64_t reads_ = 0;      // the host asked for more (tryManualTrigger calls)
+  std::uint64_t reads_due_ = 0;  // in manual mode, the next pair waits for reads_ to get here
   std::thread player_;
 };
 
