@@ -65,6 +65,28 @@ std::string writeDump(const std::string& dir) {
   return dump;
 }
 
+// Stretches a dump's timing by `factor` (fakenect paces playback by the seconds in each file
+// name), so a reader on a loaded machine or in a sanitizer build keeps up with the "camera".
+void slowDown(const std::string& dump, double factor) {
+  std::vector<std::string> names;
+  {
+    std::ifstream index(dump + "/INDEX.txt");
+    for (std::string line; std::getline(index, line);) names.push_back(line);
+  }
+  ASSERT_FALSE(names.empty());
+  const double first = std::stod(names.front().substr(2));
+  std::ofstream index(dump + "/INDEX.txt", std::ios::trunc);
+  for (const std::string& name : names) {
+    const std::size_t seconds_end = name.find('-', 2);
+    const double seconds = first + (std::stod(name.substr(2, seconds_end - 2)) - first) * factor;
+    char stretched[64];
+    std::snprintf(stretched, sizeof stretched, "%.6f", seconds);
+    const std::string renamed = name.substr(0, 2) + stretched + name.substr(seconds_end);
+    fs::rename(dump + "/" + name, dump + "/" + renamed);
+    index << renamed << "\n";
+  }
+}
+
 class OpenNI2Freenect : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -96,6 +118,7 @@ TEST_F(OpenNI2Freenect, DumpHoldsEveryFrameAsRawDisparityAndRgb) {
 TEST_F(OpenNI2Freenect, FramesThroughTheKinectDriverMatchTheFolder) {
   const std::string dir = test::freshDir();
   const std::string dump = writeDump(dir);
+  slowDown(dump, 4.0);  // ~7.5 frames/s: a recorder writing PNGs keeps up
   test::Process record(withFakenect(dump, {"record", "--source", "openni2", "--out", dir + "/rec"}),
                        dir + "/record.log");
   ASSERT_TRUE(waitForLog(dir + "/record.log", "camera stopped delivering frames", 120))
@@ -108,16 +131,16 @@ TEST_F(OpenNI2Freenect, FramesThroughTheKinectDriverMatchTheFolder) {
 
   const TumSequence folder(test::tumDir(kXyz));
   const TumSequence recorded(dir + "/rec");
-  // A live camera at 30 fps: a loaded machine drops some; most come through.
-  ASSERT_GE(recorded.size(), folder.size() / 4) << log;
-  const KinectV1Model model;
+  // A live camera: a loaded machine may still drop some; most come through.
+  ASSERT_GE(recorded.size(), folder.size() / 2) << log;
+  std::vector<cv::Mat> folder_colors;
+  for (std::size_t j = 0; j < folder.size(); ++j)
+    folder_colors.push_back(cv::imread(folder[j].rgb_path, cv::IMREAD_UNCHANGED));
   std::size_t previous = 0;
   for (std::size_t i = 0; i < recorded.size(); ++i) {
     const cv::Mat color = cv::imread(recorded[i].rgb_path, cv::IMREAD_UNCHANGED);
     std::size_t j = 0;
-    while (j < folder.size() &&
-           cv::norm(color, cv::imread(folder[j].rgb_path, cv::IMREAD_UNCHANGED), cv::NORM_INF) != 0)
-      ++j;
+    while (j < folder.size() && cv::norm(color, folder_colors[j], cv::NORM_INF) != 0) ++j;
     ASSERT_LT(j, folder.size()) << "recorded colour " << i << " is no colour image of the folder";
     if (i > 0) {
       EXPECT_GT(j, previous) << i;
