@@ -62,14 +62,15 @@ void diagnose(UsbCamera& camera) {
     return;
   }
   if (!camera.is_camera) return;
-  if (camera.vendor_id == kMicrosoft && !openni2HasDriver("libFreenectDriver")) {
+  if (camera.vendor_id == kMicrosoft && !openni2HasDriver("libFreenectDriver") &&
+      !openni2HasDriver("libKinectV1Device")) {
     camera.problem = "OpenNI2 has no driver for a Kinect v1 (" + openni2DriverDirectory() +
-                     " has no libFreenectDriver)";
+                     " has neither rgbdmap's libKinectV1Device nor libfreenect's "
+                     "libFreenectDriver)";
     camera.advice =
-        "build libfreenect's OpenNI2 driver (cmake -DBUILD_OPENNI2_DRIVER=ON in the libfreenect "
-        "sources) and install it as " +
-        openni2DriverDirectory() +
-        "/libFreenectDriver.so.0 (Debian's OpenNI2 only loads lib*.so.0 files there)";
+        "rgbdmap builds its Kinect v1 driver when libfreenect-dev is installed (sudo apt-get "
+        "install libfreenect-dev, then rebuild); other OpenNI2 programs need it copied as " +
+        openni2DriverDirectory() + "/libKinectV1Device.so.0";
   } else if (camera.vendor_id == kOrbbec && !openni2HasDriver("libOrbbec")) {
     camera.problem = "OpenNI2 has no driver for Orbbec cameras (" + openni2DriverDirectory() +
                      " has no libOrbbec)";

@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libpcl-dev libopencv-dev libopencv-contrib-dev libeigen3-dev
-  libopenni2-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
+  libopenni2-dev libfreenect-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
   libboost-dev libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev
   libtsl-hopscotch-map-dev
 )

@@ -621,3 +621,56 @@ TEST_F(OpenNI2TumDriver, PrivateRuntimeKeepsTheSystemDrivers) {
 
 }  // namespace
 }  // namespace rgbdmap
+
+namespace rgbdmap {
+namespace {
+
+// Without disconnect_after a folder plays like a recording: OpenNI2 sees a file with a frame
+// count; at speed -1 each pair comes once the last was read (a slow reader loses nothing, an
+// unreadable pair does not stall it), and after the last pair nothing more comes.
+TEST_F(OpenNI2TumDriver, AFolderPlaysLikeARecordingFrameByFrame) {
+  const std::string dir = test::freshDir();
+  const std::string copy = test::copySequence(test::tumDir(kXyz), dir + "/seq");
+  const std::size_t missing_entry = 7;
+  {
+    TumSequence original(copy);
+    replaceLine(copy + "/depth.txt", original[missing_entry].depth_line,
+                std::to_string(original[missing_entry].depth_time) + " depth/missing.png");
+  }
+  TumSequence sequence(copy);
+  openni::Device device;
+  ASSERT_EQ(device.open(("tum:" + copy).c_str()), openni::STATUS_OK)
+      << openni::OpenNI::getExtendedError();
+  ASSERT_TRUE(device.isFile());
+  openni::PlaybackControl* playback = device.getPlaybackControl();
+  ASSERT_NE(playback, nullptr);
+  EXPECT_FALSE(playback->getRepeatEnabled());  // the URI's loop=0
+  ASSERT_EQ(playback->setSpeed(-1.0f), openni::STATUS_OK);
+  openni::VideoStream depth, color;
+  ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
+  ASSERT_EQ(color.create(device, openni::SENSOR_COLOR), openni::STATUS_OK);
+  EXPECT_EQ(playback->getNumberOfFrames(depth), static_cast<int>(sequence.size()));
+  EXPECT_EQ(playback->getNumberOfFrames(color), static_cast<int>(sequence.size()));
+  ASSERT_EQ(depth.start(), openni::STATUS_OK);
+  ASSERT_EQ(color.start(), openni::STATUS_OK);
+  // Read one stream after the other, slower than 30 fps would allow for decoding and copying
+  // both: at speed -1 nothing is lost.
+  const std::vector<ReadFrame> frames = readFrames({&depth, &color}, 1000, 1500);
+  depth.stop();
+  color.stop();
+  const std::vector<ReadFrame> depths = ofSensor(frames, openni::SENSOR_DEPTH);
+  const std::vector<ReadFrame> colors = ofSensor(frames, openni::SENSOR_COLOR);
+  ASSERT_EQ(depths.size(), sequence.size() - 1);
+  ASSERT_EQ(colors.size(), sequence.size() - 1);
+  std::size_t next = 0;
+  for (std::size_t entry = 0; entry < sequence.size(); ++entry) {
+    if (entry == missing_entry) continue;
+    EXPECT_EQ(depths[next].index, static_cast<int>(entry + 1));
+    EXPECT_EQ(colors[next].index, static_cast<int>(entry + 1));
+    EXPECT_EQ(differences(depths[next].image, expectedDepth100um(rawDepth(sequence, entry))), 0);
+    ++next;
+  }
+}
+
+}  // namespace
+}  // namespace rgbdmap

@@ -17,6 +17,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
+#include "rgbdmap/tools/fakenect_dump.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -31,6 +32,7 @@ struct RecordOptions {
   std::uint64_t frames = 0;  // 0: until the source ends or Ctrl-C
   std::string config_file;
   std::vector<std::string> sets;
+  std::string format = "tum";  // or "fakenect"
 };
 
 // SIGINT/SIGTERM ask the recording to stop after the frame in hand. Signals are taken with
@@ -134,6 +136,31 @@ std::uint64_t toTumDepth(const cv::Mat& metres, cv::Mat& units) {
   return too_far;
 }
 
+// A source as a fakenect dump: every frame the source gives, until it ends or Ctrl-C.
+int recordFakenect(const RecordOptions& o, const Config& config, const StopOnSignal& signals) {
+  FakenectDump dump(o.out);
+  std::unique_ptr<FrameSource> source = openSource(o.source, config);
+  const std::string origin = source->describe();
+  spdlog::info("recording {} into {} as a fakenect dump", origin, o.out);
+  Frame frame;
+  while (!signals.stopRequested() && (o.frames == 0 || dump.frames() < o.frames)) {
+    const ReadStatus status = source->read(frame);
+    if (status == ReadStatus::kEnd) break;
+    if (status == ReadStatus::kSkipped) continue;
+    if (status == ReadStatus::kTimeout)
+      throw InputError(origin + ": camera stopped delivering frames (" +
+                       std::to_string(dump.frames()) + " frames saved)");
+    dump.add(frame);
+  }
+  std::printf(
+      "recorded %llu frames to %s as a fakenect dump\n"
+      "replay: FAKENECT_PATH=%s LD_LIBRARY_PATH=/usr/lib/x86_64-linux-gnu/fakenect "
+      "rgbdmap --source openni2\n",
+      static_cast<unsigned long long>(dump.frames()), o.out.c_str(),
+      fs::absolute(o.out).string().c_str());
+  return 0;
+}
+
 int record(const RecordOptions& o) {
   StopOnSignal signals;  // before the source starts any thread, so they inherit the mask
   Config config;
@@ -145,6 +172,7 @@ int record(const RecordOptions& o) {
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
   }
 
+  if (o.format == "fakenect") return recordFakenect(o, config, signals);
   const fs::path out(o.out);
   std::error_code ec;
   if (fs::exists(out / "rgb.txt", ec) || fs::exists(out / "depth.txt", ec))
@@ -233,6 +261,10 @@ void addRecordCommand(CLI::App& app, Command& selected) {
   cmd->add_option("-n,--frames", o->frames, "stop after this many frames (default: all / Ctrl-C)");
   cmd->add_option("-c,--config", o->config_file, "YAML config: a preset name or a file");
   cmd->add_option("--set", o->sets, "override a config key (repeatable)");
+  cmd->add_option("--format", o->format,
+                  "tum (a TUM RGB-D folder) or fakenect (a dump libfreenect's fakenect plays as a "
+                  "Kinect v1)")
+      ->check(CLI::IsMember({"tum", "fakenect"}));
   cmd->callback([o, &selected] { selected = [o] { return record(*o); }; });
 }
 

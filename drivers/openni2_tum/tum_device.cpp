@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <utility>
 
@@ -40,6 +41,8 @@ TumDevice::TumDevice(std::shared_ptr<VirtualCamera> camera, DriverLog& log,
       color_modes_(ColorStream::videoModes()) {
   sensors_[0] = {ONI_SENSOR_DEPTH, static_cast<int>(depth_modes_.size()), depth_modes_.data()};
   sensors_[1] = {ONI_SENSOR_COLOR, static_cast<int>(color_modes_.size()), color_modes_.data()};
+  // Opening a recording plays it from the start (a camera that unplugs goes on where it was).
+  if (playsLikeRecording()) camera_->seek(1);
   player_ = std::thread([this] { play(); });
 }
 
@@ -72,6 +75,10 @@ oni::driver::StreamBase* TumDevice::createStream(OniSensorType type) {
     }
     std::lock_guard<std::mutex> lock(streams_mutex_);
     streams_.push_back(std::move(stream));
+    {
+      std::lock_guard<std::mutex> state_lock(state_mutex_);
+      ++created_streams_;
+    }
     return streams_.back().get();
   } catch (const std::exception& e) {  // nothing may cross into OpenNI2's C code
     log_.error(std::string("cannot create a stream: ") + e.what());
@@ -83,6 +90,10 @@ void TumDevice::destroyStream(oni::driver::StreamBase* stream) {
   if (stream == nullptr) return;
   stream->stop();  // OpenNI2 stops streams first; a stream still running must not be counted
   std::lock_guard<std::mutex> lock(streams_mutex_);
+  {
+    std::lock_guard<std::mutex> state_lock(state_mutex_);
+    if (created_streams_ > 0) --created_streams_;
+  }
   streams_.erase(
       std::remove_if(streams_.begin(), streams_.end(),
                      [stream](const std::unique_ptr<TumStream>& s) { return s.get() == stream; }),
@@ -97,6 +108,24 @@ OniStatus TumDevice::setProperty(int property, const void* data, int size) {
     // The recorded depth is registered already; it cannot be turned back.
     return mode == ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR ? ONI_STATUS_OK : ONI_STATUS_NOT_SUPPORTED;
   }
+  if (property == ONI_DEVICE_PROPERTY_PLAYBACK_SPEED && playsLikeRecording()) {
+    float speed = 0;
+    if (const OniStatus status = readProperty(data, size, speed); status != ONI_STATUS_OK)
+      return status;
+    if (!std::isfinite(speed)) return ONI_STATUS_BAD_PARAMETER;
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    speed_ = speed;
+    ++runs_;  // the time base restarts at the new speed
+    state_changed_.notify_all();
+    return ONI_STATUS_OK;
+  }
+  if (property == ONI_DEVICE_PROPERTY_PLAYBACK_REPEAT_ENABLED && playsLikeRecording()) {
+    OniBool repeat = FALSE;
+    if (const OniStatus status = readProperty(data, size, repeat); status != ONI_STATUS_OK)
+      return status;
+    camera_->setLooping(repeat == TRUE);
+    return ONI_STATUS_OK;
+  }
   return isPropertySupported(property) ? ONI_STATUS_NOT_SUPPORTED : ONI_STATUS_NOT_IMPLEMENTED;
 }
 
@@ -108,17 +137,56 @@ OniStatus TumDevice::getProperty(int property, void* data, int* size) {
       return writeProperty(data, size, driverVersion());
     case ONI_DEVICE_PROPERTY_SERIAL_NUMBER:
       return writeProperty(data, size, std::string(camera_->info().name));
+    case ONI_DEVICE_PROPERTY_PLAYBACK_SPEED: {
+      if (!playsLikeRecording()) return ONI_STATUS_NOT_IMPLEMENTED;
+      std::lock_guard<std::mutex> lock(state_mutex_);
+      return writeProperty(data, size, speed_);
+    }
+    case ONI_DEVICE_PROPERTY_PLAYBACK_REPEAT_ENABLED:
+      if (!playsLikeRecording()) return ONI_STATUS_NOT_IMPLEMENTED;
+      return writeProperty(data, size, camera_->looping() ? OniBool(TRUE) : OniBool(FALSE));
     default:
       return ONI_STATUS_NOT_IMPLEMENTED;
   }
 }
 
 OniBool TumDevice::isPropertySupported(int property) {
+  if (property == ONI_DEVICE_PROPERTY_PLAYBACK_SPEED ||
+      property == ONI_DEVICE_PROPERTY_PLAYBACK_REPEAT_ENABLED)
+    return playsLikeRecording() ? TRUE : FALSE;
   return property == ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION ||
                  property == ONI_DEVICE_PROPERTY_DRIVER_VERSION ||
                  property == ONI_DEVICE_PROPERTY_SERIAL_NUMBER
              ? TRUE
              : FALSE;
+}
+
+OniStatus TumDevice::invoke(int command, void* data, int size) {
+  if (command != ONI_DEVICE_COMMAND_SEEK || !playsLikeRecording()) return ONI_STATUS_NOT_SUPPORTED;
+  OniSeek seek{};
+  if (const OniStatus status = readProperty(data, size, seek); status != ONI_STATUS_OK)
+    return status;
+  if (!camera_->seek(seek.frameIndex)) return ONI_STATUS_BAD_PARAMETER;
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  ++runs_;  // timing restarts from the pair sought
+  reads_due_ = reads_;
+  state_changed_.notify_all();
+  return ONI_STATUS_OK;
+}
+
+OniBool TumDevice::isCommandSupported(int command) {
+  return command == ONI_DEVICE_COMMAND_SEEK && playsLikeRecording() ? TRUE : FALSE;
+}
+
+OniStatus TumDevice::tryManualTrigger() {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  ++reads_;
+  state_changed_.notify_all();
+  return ONI_STATUS_OK;
+}
+
+int TumDevice::recordedFrames() const {
+  return playsLikeRecording() ? static_cast<int>(camera_->size()) : 0;
 }
 
 OniBool TumDevice::isImageRegistrationModeSupported(OniImageRegistrationMode mode) {
@@ -145,6 +213,7 @@ void TumDevice::play() {
   Clock::time_point run_start;
   double run_first_pace = 0.0;
   bool timed = false;
+  bool first_of_run = true;
   std::unique_lock<std::mutex> lock(state_mutex_);
   while (true) {
     state_changed_.wait(lock, [this] { return closing_ || running_streams_ > 0; });
@@ -157,28 +226,52 @@ void TumDevice::play() {
     const std::optional<VirtualCamera::Shot> shot = camera_->peek(generation_);
     lock.lock();
     if (!shot) {
-      // The end of a sequence that does not loop, or unplugged: nothing will come any more.
-      state_changed_.wait(lock, [this] { return closing_; });
-      return;
+      // The end of a sequence that does not loop, or unplugged: nothing comes until a seek or
+      // a restart (a new run).
+      state_changed_.wait(lock, [this, run] { return closing_ || runs_ != run; });
+      if (closing_) return;
+      continue;
     }
     if (!timed) {
       run_start = Clock::now() + kFirstFrameDelay;
       run_first_pace = shot->pace_time;
       timed = true;
+      first_of_run = true;
     }
-    const Clock::time_point due =
-        run_start + std::chrono::duration_cast<Clock::duration>(
-                        std::chrono::duration<double>(shot->pace_time - run_first_pace));
+    // Manual speed: the first pair of a run at its time, each next one once the last was read.
+    const bool manual = speed_ <= 0;
+    const double offset = manual ? 0.0 : (shot->pace_time - run_first_pace) / speed_;
+    const Clock::time_point due = run_start + std::chrono::duration_cast<Clock::duration>(
+                                                  std::chrono::duration<double>(offset));
     // Woken early by a stop, a restart or closing: the pair stays unplayed.
     if (state_changed_.wait_until(
             lock, due, [this, run] { return closing_ || runs_ != run || running_streams_ == 0; })) {
       if (closing_) return;
       continue;
     }
+    // The first pair waits (a little) for every created stream to run, so none misses it and
+    // then waits forever for a read that cannot come.
+    if (manual && first_of_run)
+      state_changed_.wait_for(lock, std::chrono::seconds(1), [this, run] {
+        return closing_ || runs_ != run || running_streams_ >= created_streams_;
+      });
+    if (manual && !first_of_run &&
+        !state_changed_.wait_for(lock, std::chrono::hours(24), [this, run] {
+          return closing_ || runs_ != run || running_streams_ == 0 || reads_ >= reads_due_;
+        }))
+      continue;
+    if (closing_) return;
+    if (runs_ != run || running_streams_ == 0) continue;
+    first_of_run = false;
+    // In manual mode the next pair waits until the host asks for more (it waits for a frame
+    // and none is left); a pair that could not be decoded is not waited for.
+    const std::uint64_t reads_before = reads_;
+    bool delivered = false;
     lock.unlock();
     std::string error;
     if (camera_->take(*shot, frame, error)) {
       deliver(frame, *shot);
+      delivered = true;
       if (camera_->countDelivered(generation_)) {
         log_.info(std::string(camera_->info().uri) + ": unplugged after " +
                   std::to_string(camera_->uri().disconnect_after) + " frames");
@@ -188,6 +281,7 @@ void TumDevice::play() {
       log_.warning("skipping frame " + std::to_string(shot->frame_index) + ": " + error);
     }
     lock.lock();
+    reads_due_ = delivered ? reads_before + 1 : reads_;
   }
 }
 

@@ -39,10 +39,20 @@ class TumDevice : public oni::driver::DeviceBase, private StreamHost {
   OniStatus getProperty(int property, void* data, int* size) override;
   OniBool isPropertySupported(int property) override;
   OniBool isImageRegistrationModeSupported(OniImageRegistrationMode mode) override;
+  OniStatus invoke(int command, void* data, int size) override;
+  OniBool isCommandSupported(int command) override;
+  // Called by OpenNI2 when the host waits for a frame and none is there: at playback speed
+  // <= 0 ("manual") the next pair comes then.
+  OniStatus tryManualTrigger() override;
 
  private:
   bool streamStarted() override;
   void streamStopped() override;
+  int recordedFrames() const override;
+  // A folder without a simulated unplug plays like a recording (OpenNI2's Device::isFile()):
+  // playback speed, repeat (the loop option), seek and a frame count; so a host knows where it
+  // ends and can read it frame by frame. With disconnect_after it acts as a live camera.
+  bool playsLikeRecording() const { return camera_->uri().disconnect_after == 0; }
   void play();
   void deliver(const Frame& frame, const VirtualCamera::Shot& shot);
 
@@ -61,8 +71,12 @@ class TumDevice : public oni::driver::DeviceBase, private StreamHost {
   std::mutex state_mutex_;
   std::condition_variable state_changed_;
   int running_streams_ = 0;
+  int created_streams_ = 0;
   std::uint64_t runs_ = 0;  // times the first stream started: each restarts the time base
   bool closing_ = false;
+  float speed_ = 1.0f;           // playback speed: a ratio of the recorded timing, <= 0 manual
+  std::uint64_t reads_ = 0;      // the host asked for more (tryManualTrigger calls)
+  std::uint64_t reads_due_ = 0;  // in manual mode, the next pair waits for reads_ to get here
   std::thread player_;
 };
 

@@ -122,6 +122,9 @@ OniStatus TumStream::getProperty(int property, void* data, int* size) {
                            static_cast<float>(fieldOfView(intrinsics_.height, intrinsics_.fy)));
     case ONI_STREAM_PROPERTY_STRIDE:
       return writeProperty(data, size, deliveredRect().width * bytesPerPixel(mode_.pixelFormat));
+    case ONI_STREAM_PROPERTY_NUMBER_OF_FRAMES:
+      if (host_.recordedFrames() <= 0) return ONI_STATUS_NOT_IMPLEMENTED;
+      return writeProperty(data, size, host_.recordedFrames());
     default:
       return getOwnProperty(property, data, size, mode_);
   }
@@ -136,6 +139,8 @@ OniBool TumStream::isPropertySupported(int property) {
     case ONI_STREAM_PROPERTY_VERTICAL_FOV:
     case ONI_STREAM_PROPERTY_STRIDE:
       return TRUE;
+    case ONI_STREAM_PROPERTY_NUMBER_OF_FRAMES:
+      return host_.recordedFrames() > 0 ? TRUE : FALSE;
     default:
       return hasOwnProperty(property) ? TRUE : FALSE;
   }

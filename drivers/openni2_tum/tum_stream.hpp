@@ -32,6 +32,8 @@ class StreamHost {
   // Returns false when the device cannot deliver any more (it was unplugged).
   virtual bool streamStarted() = 0;
   virtual void streamStopped() = 0;
+  // Pairs in the folder when the device plays like a recording, 0 when it acts as a live camera.
+  virtual int recordedFrames() const = 0;
 };
 
 // The part of a depth or colour stream that does not depend on the pixels: video modes,

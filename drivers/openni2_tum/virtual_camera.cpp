@@ -32,7 +32,8 @@ std::string absoluteFolder(const std::string& folder) {
 VirtualCamera::VirtualCamera(const TumDeviceUri& uri)
     : uri_(uri),
       sequence_(absoluteFolder(uri.folder)),
-      intrinsics_(intrinsicsForFolder(sequence_.folder())) {
+      intrinsics_(intrinsicsForFolder(sequence_.folder())),
+      looping_(uri.loop) {
   copyText(info_.uri, uri_.text);
   copyText(info_.vendor, "TUM RGB-D");
   copyText(info_.name, std::filesystem::path(sequence_.folder()).filename().string());
@@ -41,6 +42,23 @@ VirtualCamera::VirtualCamera(const TumDeviceUri& uri)
   const double last = sequence_[sequence_.size() - 1].rgb_time;
   const double interval = sequence_.size() > 1 ? (last - first) / (sequence_.size() - 1) : 1 / 30.0;
   loop_period_us_ = microseconds(last - first + interval);
+}
+
+bool VirtualCamera::looping() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return looping_;
+}
+
+void VirtualCamera::setLooping(bool looping) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  looping_ = looping;
+}
+
+bool VirtualCamera::seek(int frame_index) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (frame_index < 1 || static_cast<std::size_t>(frame_index) > sequence_.size()) return false;
+  position_ = static_cast<std::uint64_t>(frame_index - 1);
+  return true;
 }
 
 std::uint64_t VirtualCamera::generation() const {
@@ -74,7 +92,7 @@ VirtualCamera::Shot VirtualCamera::shotAt(std::uint64_t position) const {
 std::optional<VirtualCamera::Shot> VirtualCamera::peek(std::uint64_t generation) const {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!plugged_ || generation != generation_) return std::nullopt;
-  if (!uri_.loop && position_ >= sequence_.size()) return std::nullopt;
+  if (!looping_ && position_ >= sequence_.size()) return std::nullopt;
   return shotAt(position_);
 }
 

@@ -36,6 +36,13 @@ class VirtualCamera {
   const OniDeviceInfo& info() const { return info_; }
   const CameraIntrinsics& intrinsics() const { return intrinsics_; }
   const std::string& folder() const { return sequence_.folder(); }
+  std::size_t size() const { return sequence_.size(); }  // associated pairs in the folder
+
+  // Starts over at the end (the URI's loop option until set).
+  bool looping() const;
+  void setLooping(bool looping);
+  // Plays `frame_index` next (1 = the first pair); false when it is out of the sequence.
+  bool seek(int frame_index);
 
   // Changes at every unplug: a device remembers the generation it was opened in.
   std::uint64_t generation() const;
@@ -66,6 +73,7 @@ class VirtualCamera {
   std::uint64_t generation_ = 0;
   bool plugged_ = true;
   std::size_t delivered_since_plug_ = 0;
+  bool looping_;
 };
 
 }  // namespace rgbdmap::openni2_tum

@@ -111,6 +111,7 @@ int Pipeline::run(RunControl& control) {
     try {
       Frame* frame = nullptr;
       std::uint64_t index = 0;
+      std::uint64_t index_at_outage_checkpoint = 0;
       while (!control.stop.load()) {
         if (!frame && !(frame = queue.acquire())) break;
         const auto read_start = Clock::now();
@@ -123,13 +124,17 @@ int Pipeline::run(RunControl& control) {
         if (status == ReadStatus::kTimeout) {
           if (!source_->canReconnect())
             throw InputError(source_->describe() + ": camera stopped delivering frames");
-          // Keep everything mapped: checkpoint now, then wait for the same camera.
+          // Keep everything mapped: checkpoint now, then wait for the same camera. A camera
+          // that reopens but delivers nothing does not rewrite an unchanged map every cycle.
           stats_.disconnects.fetch_add(1);
-          control.snapshot.store(true);
+          const bool new_frames = index != index_at_outage_checkpoint;
+          if (new_frames) control.snapshot.store(true);
+          index_at_outage_checkpoint = index;
           spdlog::warn(
-              "{}: camera stopped delivering frames; map checkpointed, waiting for it "
-              "to come back (Ctrl-C saves and quits)",
-              source_->describe());
+              "{}: camera stopped delivering frames; {}, waiting for it to come back (Ctrl-C "
+              "saves and quits)",
+              source_->describe(),
+              new_frames ? "map checkpointed" : "no new frame since the last checkpoint");
           while (!control.stop.load() && !source_->reconnect()) {
           }
           if (!control.stop.load())

@@ -11,7 +11,19 @@ std::string presetForSource(const std::string& spec) {
     const std::string preset = TumSequence::presetForFolder(spec.substr(4));
     return preset.empty() ? "default" : preset;
   }
-  if (spec.rfind("openni2", 0) == 0) return "kinect_v1";
+  if (spec.rfind("openni2:tum:", 0) == 0) {
+    // A TUM folder through the OpenNI2 driver: the folder's camera (options after '?' aside).
+    const std::string uri = spec.substr(12);
+    const std::string preset = TumSequence::presetForFolder(uri.substr(0, uri.find('?')));
+    return preset.empty() ? "default" : preset;
+  }
+  if (spec == "openni2" || spec.rfind("openni2:", 0) == 0) {
+    const std::string uri = spec == "openni2" ? "" : spec.substr(8);
+    const bool recording = uri.size() >= 4 && uri.compare(uri.size() - 4, 4, ".oni") == 0;
+    if (recording) return "kinect_v1";
+    const std::string model = openNI2CameraModel(uri);
+    return model.empty() ? "kinect_v1" : model;
+  }
   return "default";
 }
 

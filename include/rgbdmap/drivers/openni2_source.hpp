@@ -22,4 +22,9 @@ std::unique_ptr<FrameSource> openOpenNI2Source(const std::string& uri_or_file,
 // The devices OpenNI2 can open right now, one "URI (vendor name, USB vvvv:pppp)" each.
 std::vector<std::string> listOpenNI2Devices();
 
+// Which camera model `uri` ("" = the first device OpenNI2 lists) is, from its USB id or name:
+// "xtion" for PrimeSense / ASUS Xtion / Carmine (USB 1d27:*), "kinect_v1" for a Kinect v1 and
+// any other camera, "" when OpenNI2 lists no such device (or cannot start).
+std::string openNI2CameraModel(const std::string& uri);
+
 }  // namespace rgbdmap
