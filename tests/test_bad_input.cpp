@@ -150,13 +150,15 @@ TEST_F(BadImage, DepthOfTheWrongSize) {
 TEST_F(BadImage, NotAnImageAtAll) {
   // Must not silently reuse the previous frame's colour.
   std::ofstream(seq_ + "/rgb/1305031102.311267.png") << "this is not a picture";
-  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ + "/rgb/1305031102.311267.png: not a PNG image");
+  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ +
+                   "/rgb/1305031102.311267.png: not an image format OpenCV can read");
 }
 
 TEST_F(BadImage, ColourWhereDepthShouldBe) {
   fs::copy_file(seq_ + "/rgb/1305031102.311267.png", seq_ + "/depth/1305031102.295279.png",
                 fs::copy_options::overwrite_existing);
-  expectOneSkipped("depth must be a 16-bit single-channel PNG");
+  expectOneSkipped(
+      "depth must be a 16-bit single-channel image (this PNG has 8-bit 3-channel pixels)");
 }
 
 TEST(BadInput, UnknownConfigKeyAndBadRate) {

@@ -13,6 +13,7 @@
 #include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
+#include "rgbdmap/runtime/unmapped_frames.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -218,6 +219,10 @@ int Pipeline::run(RunControl& control) {
     spdlog::error("{}", fatal);
     exit_code = 1;
   }
+  // Nothing mapped is a failure; most frames unused is worth saying.
+  const bool stopped_on_request = control.stop.load() && fatal.empty();
+  exit_code = std::max(
+      exit_code, UnmappedFrames::of(stats_, source_->skipReasons()).report(stopped_on_request));
   return exit_code;
 }
 
