@@ -5,8 +5,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <opencv2/imgcodecs.hpp>
 
+#include "rgbdmap/capture/tum_sequence.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -159,6 +161,71 @@ TEST_F(BadImage, ColourWhereDepthShouldBe) {
                 fs::copy_options::overwrite_existing);
   expectOneSkipped(
       "depth must be a 16-bit single-channel image (this PNG has 8-bit 3-channel pixels)");
+}
+
+// Datasets converted to the TUM layout (7-Scenes, ...) often ship JPEG colour: any format OpenCV
+// reads is colour. Depth must stay lossless 16-bit: PNG or TIFF.
+TEST_F(BadImage, JpegColourAndTiffDepthMap) {
+  const TumSequence sequence(seq_);
+  std::ofstream rgb(seq_ + "/rgb.txt"), depth(seq_ + "/depth.txt");
+  rgb << std::fixed << std::setprecision(6);
+  depth << std::fixed << std::setprecision(6);
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    const std::string jpg = fs::path(sequence[i].rgb_path).stem().string() + ".jpg";
+    ASSERT_TRUE(cv::imwrite(seq_ + "/rgb/" + jpg, cv::imread(sequence[i].rgb_path)));
+    rgb << sequence[i].rgb_time << " rgb/" << jpg << "\n";
+    std::string depth_file = "depth/" + fs::path(sequence[i].depth_path).filename().string();
+    if (i % 2 == 0) {  // every other depth image as TIFF
+      depth_file = "depth/" + fs::path(sequence[i].depth_path).stem().string() + ".tiff";
+      ASSERT_TRUE(cv::imwrite(seq_ + "/" + depth_file,
+                              cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED)));
+    }
+    depth << sequence[i].depth_time << " " << depth_file << "\n";
+  }
+  rgb.close();
+  depth.close();
+  const Outcome o = map(seq_, dir_);
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  const std::string stats = statsOf(dir_);
+  EXPECT_NE(stats.find("\"frames_skipped\": 0,"), std::string::npos) << stats;
+  EXPECT_GT(test::loadMap(dir_ + "/map.pcd").size(), 10000u);
+}
+
+TEST_F(BadImage, JpegDepthIsRefusedByName) {
+  const std::string path = seq_ + "/depth/1305031102.295279.png";  // depth.txt line 8
+  ASSERT_TRUE(cv::imwrite(seq_ + "/depth.jpg", cv::imread(path)));
+  fs::rename(seq_ + "/depth.jpg", path);
+  expectOneSkipped(seq_ + "/depth.txt:8: " + path +
+                   ": depth must be a 16-bit PNG or TIFF image (this is JPEG)");
+}
+
+// A run that maps no frame has failed: exit 1, saying why and how many frames each reason hit.
+TEST_F(BadImage, NothingMappedExitsNonZeroWithTheReasons) {
+  const std::size_t frames = TumSequence(seq_).size();
+  fs::remove_all(seq_ + "/depth");
+  fs::create_directory(seq_ + "/depth");
+  const Outcome o = map(seq_, dir_);
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(
+      o.output.find("nothing mapped: none of the " + std::to_string(frames) +
+                    " frames could be used:\n  " + std::to_string(frames) +
+                    " frames: depth image: cannot open image (first: " + seq_ + "/depth.txt:1: "),
+      std::string::npos)
+      << o.output;
+}
+
+TEST_F(BadImage, MostFramesUnusedIsSaidAtTheEnd) {
+  const TumSequence sequence(seq_);
+  const std::size_t removed = sequence.size() - 5;
+  for (std::size_t i = 5; i < sequence.size(); ++i) fs::remove(sequence[i].rgb_path);
+  const Outcome o = map(seq_, dir_);
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("most frames were not mapped: " + std::to_string(removed) + " of " +
+                          std::to_string(sequence.size()) + " could not be used:\n  " +
+                          std::to_string(removed) + " frames: colour image: cannot open image"),
+            std::string::npos)
+      << o.output;
+  EXPECT_GT(test::loadMap(dir_ + "/map.pcd").size(), 10000u);
 }
 
 TEST(BadInput, UnknownConfigKeyAndBadRate) {

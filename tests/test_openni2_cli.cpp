@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -41,6 +42,31 @@ double statValue(const std::string& json, const std::string& name) {
     return -1;
   }
   return std::stod(json.substr(at + name.size() + 3));
+}
+
+// Waits (up to `timeout_s`) for `condition`, checking every 50 ms: tests wait for what they need
+// to see, never for a fixed time.
+bool waitUntil(const std::function<bool()>& condition, double timeout_s = 120) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return true;
+}
+
+// Lines of a TUM list that name a frame (not comments).
+std::size_t listedFrames(const std::string& path) {
+  std::ifstream in(path);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty() && line[0] != '#';
+  return n;
+}
+
+std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
 }
 
 // Every listed image of a recorded folder exists, decodes, and the two lists
@@ -189,12 +215,12 @@ TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
 TEST(OpenNI2Cli, RecordStopsCleanlyOnSigintWithCompleteLists) {
   const std::string base = test::freshDir();
   const std::string dir = base + "/interrupted";
-  // At the recorded speed the 100 frames take about 3.3 s; interrupt after
-  // about one.
+  // At the recorded speed the 100 frames take about 3.3 s; interrupt once a few are recorded.
   test::Process record({test::binary(), "record", "--source", "tum:" + test::tumDir(kRpy), "--out",
                         dir, "--set", "replay.rate=1"},
                        base + "/record.log");
-  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  ASSERT_TRUE(waitUntil([&] { return listedFrames(dir + "/rgb.txt") > 5 || !record.running(); }))
+      << test::readFile(base + "/record.log");
   record.signal(SIGINT);
   const int code = record.wait(30);
   const std::string log = test::readFile(base + "/record.log");
@@ -276,7 +302,12 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
                      "--stats", dir + "/stats.json", "--no-render", "-q"},
                     dir + "/map.log");
   unsetenv("LD_LIBRARY_PATH");
-  std::this_thread::sleep_for(std::chrono::seconds(6));
+  // The camera goes away twice: the unplug, then the end of the folder (a device that does not
+  // loop delivers nothing more). Stop it after the second time.
+  const std::string kStopped = "camera stopped delivering frames";
+  EXPECT_TRUE(waitUntil([&] {
+    return occurrences(test::readFile(dir + "/map.log"), kStopped) >= 2 || !map.running();
+  })) << test::readFile(dir + "/map.log");
   map.signal(SIGINT);
   const int code = map.wait(60);
   const std::string log = test::readFile(dir + "/map.log");
