@@ -201,16 +201,17 @@ TEST_F(BadImage, JpegDepthIsRefusedByName) {
 
 // A run that maps no frame has failed: exit 1, saying why and how many frames each reason hit.
 TEST_F(BadImage, NothingMappedExitsNonZeroWithTheReasons) {
-  const std::size_t frames = TumSequence(seq_).size();
+  const TumSequence sequence(seq_);
+  const std::size_t frames = sequence.size();
   fs::remove_all(seq_ + "/depth");
   fs::create_directory(seq_ + "/depth");
   const Outcome o = map(seq_, dir_);
   EXPECT_EQ(o.exit_code, 1) << o.output;
-  EXPECT_NE(
-      o.output.find("nothing mapped: none of the " + std::to_string(frames) +
-                    " frames could be used:\n  " + std::to_string(frames) +
-                    " frames: depth image: cannot open image (first: " + seq_ + "/depth.txt:1: "),
-      std::string::npos)
+  EXPECT_NE(o.output.find("nothing mapped: none of the " + std::to_string(frames) +
+                          " frames could be used:\n  " + std::to_string(frames) +
+                          " frames: depth image: cannot open image (first: " + seq_ +
+                          "/depth.txt:" + std::to_string(sequence[0].depth_line) + ": "),
+            std::string::npos)
       << o.output;
 }
 
