@@ -362,7 +362,12 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
   setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
   test::Process device_run(live, dir + "/device.log");
   unsetenv("LD_LIBRARY_PATH");
-  std::this_thread::sleep_for(std::chrono::seconds(5));  // the folder plays in ~1.1 s
+  // The folder plays in ~1.1 s; then the device delivers nothing more. Stop it after that.
+  EXPECT_TRUE(waitUntil([&] {
+    return test::readFile(dir + "/device.log").find("camera stopped delivering frames") !=
+               std::string::npos ||
+           !device_run.running();
+  })) << test::readFile(dir + "/device.log");
   device_run.signal(SIGINT);
   ASSERT_EQ(device_run.wait(120), 0) << test::readFile(dir + "/device.log");
 
