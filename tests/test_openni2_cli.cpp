@@ -298,9 +298,11 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   // A live device never ends by itself: stop it with SIGINT once the folder has
   // played.
   setenv("LD_LIBRARY_PATH", runtime.c_str(), 1);
-  test::Process map({test::binary(), "--source", "openni2:" + uri, "--out", dir + "/map.pcd",
-                     "--stats", dir + "/stats.json", "--no-render", "-q"},
-                    dir + "/map.log");
+  // Every frame a keyframe: which frames were mapped shows in the keyframe list.
+  test::Process map(
+      {test::binary(), "--source", "openni2:" + uri, "--out", dir + "/map.pcd", "--stats",
+       dir + "/stats.json", "--no-render", "-q", "--set", "keyframe.every_n=1"},
+      dir + "/map.log");
   unsetenv("LD_LIBRARY_PATH");
   // The camera goes away twice: the unplug, then the end of the folder (a device that does not
   // loop delivers nothing more). Stop it after the second time.
@@ -314,16 +316,19 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   ASSERT_EQ(code, 0) << log;
   const std::string stats = test::readFile(dir + "/stats.json");
   EXPECT_GE(statValue(stats, "disconnects"), 1) << log;
-  // A live device keeps its own pace: a frame may be lost while the streams
-  // restart, so the count is bounded rather than exact; more than 12 means
-  // capture resumed after the unplug.
-  const double captured = statValue(stats, "frames_captured");
-  EXPECT_GT(captured, 12) << log;
-  EXPECT_GE(captured, TumSequence(test::tumDir(kXyz)).size() - 4.0) << log;
-  EXPECT_LE(captured, TumSequence(test::tumDir(kXyz)).size()) << log;
-  // Keyframes every 10th frame: the third one comes after the unplug, so
-  // mapping resumed.
-  EXPECT_GE(statValue(stats, "keyframes"), 3) << log;
+  // A live device keeps its own pace: frames a busy reader misses, or that play while the
+  // streams restart, are lost, so how many are captured depends on the machine. What must hold:
+  // a frame the device played after the unplug (the 13th onwards) was mapped.
+  const TumSequence sequence(test::tumDir(kXyz));
+  EXPECT_LE(statValue(stats, "frames_captured"), sequence.size()) << log;
+  double last_keyframe = 0;
+  {
+    std::ifstream keyframes(dir + "/map_keyframes.txt");
+    for (std::string line; std::getline(keyframes, line);)
+      if (!line.empty() && line[0] != '#') last_keyframe = std::stod(line);
+  }
+  EXPECT_GT(last_keyframe, sequence[11].rgb_time + 1e-4)
+      << "nothing mapped after the unplug: " << log;
   // Nothing mapped before the unplug is lost: the checkpoint written when the camera went away
   // (and every later one) holds no more points than the final map.
   const std::size_t final_points = test::loadMap(dir + "/map.pcd").size();
