@@ -2,6 +2,7 @@
 # dependencies keep pointing one way:
 #   tools, runtime/main -> runtime -> mapping -> tracking -> capture -> base
 #                          runtime -> drivers -> capture;   eval -> sim -> base;   eval -> capture
+#   launcher (the `rgbdmap` command: libc only, includes no rgbdmap header)
 # Run as a build step: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
 cmake_policy(SET CMP0057 NEW)
 set(allowed_base base)
@@ -13,10 +14,12 @@ set(allowed_eval base capture sim eval)
 set(allowed_drivers base capture drivers)
 set(allowed_runtime base capture tracking mapping drivers runtime)
 set(allowed_tools base capture tracking mapping drivers runtime sim eval tools)
+set(allowed_launcher "")
 
 set(violations "")
-foreach(layer base capture tracking mapping sim eval drivers runtime tools)
+foreach(layer base capture tracking mapping sim eval drivers runtime tools launcher)
   file(GLOB_RECURSE files
+    ${SOURCE_DIR}/src/${layer}/*.c
     ${SOURCE_DIR}/src/${layer}/*.cpp ${SOURCE_DIR}/src/${layer}/*.hpp
     ${SOURCE_DIR}/include/rgbdmap/${layer}/*.hpp)
   if(layer STREQUAL "drivers")

@@ -7,6 +7,7 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <thread>
 
 #include "rgbdmap/base/config.hpp"
@@ -26,19 +27,27 @@ std::string stem(const std::string& path) {
              : path.substr(0, dot);
 }
 
-// Signals are taken by one thread with sigwait, so handlers never run inside
-// the mapping code. SIGUSR1: checkpoint now. SIGINT/SIGTERM: stop, drain, save.
-// A second SIGINT: quit at once, removing the temporary file of a write in
-// progress (the destination is never half-written).
+// Signals are taken by one thread with sigwait, from the first instant of main (the `rgbdmap`
+// launcher blocked them before this program was even loaded), so handlers never run inside the
+// mapping code and no signal can kill the process during start-up.
+// SIGUSR1: checkpoint now (during start-up there is nothing to write yet: a no-op).
+// SIGINT/SIGTERM: stop; during start-up, before mapping begins; while mapping, drain and save.
+// A second SIGINT: quit at once, removing the temporary file of a write in progress (the
+// destination is never half-written).
 class SignalThread {
  public:
-  SignalThread(rgbdmap::RunControl& control, std::string map_path)
-      : control_(control), map_path_(std::move(map_path)) {
+  explicit SignalThread(rgbdmap::RunControl& control) : control_(control) {
     thread_ = std::thread([this] { run(); });
   }
   ~SignalThread() {
     done_.store(true);
+    pthread_kill(thread_.native_handle(), SIGUSR1);  // wakes it now rather than at its timeout
     thread_.join();
+  }
+  // From here on SIGUSR1 asks the pipeline for a checkpoint of `map_path`.
+  void mappingStarts(const std::string& map_path) {
+    map_path_ = map_path;
+    mapping_.store(true);
   }
   static void blockInThisThread() {
     sigset_t set = signals();
@@ -65,25 +74,37 @@ class SignalThread {
     const timespec timeout{0, 100 * 1000 * 1000};
     while (!done_.load()) {
       const int sig = sigtimedwait(&set, nullptr, &timeout);
+      if (done_.load()) break;
+      const bool mapping = mapping_.load();
       if (sig == SIGUSR1) {
-        spdlog::info("SIGUSR1: writing a checkpoint");
-        control_.snapshot.store(true);
+        if (mapping) {
+          spdlog::info("SIGUSR1: writing a checkpoint");
+          control_.snapshot.store(true);
+        } else {
+          spdlog::info("SIGUSR1 during start-up: nothing mapped yet, no checkpoint");
+        }
       } else if (sig == SIGINT || sig == SIGTERM) {
         if (control_.stop.exchange(true) && sig == SIGINT) {
-          std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
-          for (const char* trajectory : {"_keyframes.txt.tmp", "_trajectory.txt.tmp"})
-            std::remove((stem(map_path_) + trajectory).c_str());
+          if (mapping) {
+            std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
+            for (const char* trajectory : {"_keyframes.txt.tmp", "_trajectory.txt.tmp"})
+              std::remove((stem(map_path_) + trajectory).c_str());
+          }
           std::fputs("\nsecond interrupt: quitting without the final save\n", stderr);
           std::_Exit(130);
         }
-        spdlog::info("{}: stopping (interrupt again to quit without saving)",
-                     sig == SIGINT ? "SIGINT" : "SIGTERM");
+        const char* name = sig == SIGINT ? "SIGINT" : "SIGTERM";
+        if (mapping)
+          spdlog::info("{}: stopping (interrupt again to quit without saving)", name);
+        else
+          spdlog::info("{} during start-up: stopping before mapping begins", name);
       }
     }
   }
 
   rgbdmap::RunControl& control_;
-  std::string map_path_;
+  std::string map_path_;  // written before mapping_ is set, read after
+  std::atomic<bool> mapping_{false};
   std::atomic<bool> done_{false};
   std::thread thread_;
 };
@@ -115,7 +136,14 @@ void checkOutputFolder(const std::string& map_path) {
                               " is not writable");
 }
 
-int runMapping(const MapOptions& o) {
+// A stop requested before mapping began: nothing was mapped and nothing is written.
+bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
+  if (!control.stop.load()) return false;
+  spdlog::info("stopped during start-up: nothing mapped, no map written");
+  return true;
+}
+
+int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& signals) {
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
@@ -137,7 +165,9 @@ int runMapping(const MapOptions& o) {
     if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
   }
+  if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
+  if (stoppedDuringStartUp(control)) return 0;
   if (config.pose_source == "auto")
     config.pose_source = source->providesPoses() ? "groundtruth" : "odometry";
   if (config.pose_source == "groundtruth" && !source->providesPoses())
@@ -153,10 +183,9 @@ int runMapping(const MapOptions& o) {
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
-  RunControl control;
   int code = 0;
   {
-    SignalThread signals(control, o.out);
+    signals.mappingStarts(o.out);
     Pipeline pipeline(config, std::move(source), outputs);
     code = pipeline.run(control);
     if (!o.stats_file.empty()) {
@@ -180,8 +209,13 @@ int runMapping(const MapOptions& o) {
 int main(int argc, char** argv) {
   // Before any thread exists, so all inherit the mask.
   SignalThread::blockInThisThread();
+  // A file-size limit (ulimit -f) must fail the write with EFBIG, reported like a full disk,
+  // instead of killing the process.
+  std::signal(SIGXFSZ, SIG_IGN);
   // spdlog creates its registry on first use: do it here, before any thread can log.
   spdlog::default_logger_raw();
+  rgbdmap::RunControl control;
+  auto signals = std::make_unique<SignalThread>(control);
   CLI::App app{"rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};
   app.set_version_flag("--version", RGBDMAP_VERSION);
   MapOptions o;
@@ -213,7 +247,9 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   try {
-    if (!selected) return runMapping(o);
+    if (!selected) return runMapping(o, control, *signals);
+    signals.reset();
+    if (stoppedDuringStartUp(control)) return 0;
     SignalThread::unblockInThisThread();
     return selected();
   } catch (const rgbdmap::InputError& e) {

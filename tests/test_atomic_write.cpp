@@ -85,6 +85,64 @@ TEST(AtomicWrite, DiskFullKeepsThePreviousMap) {
   for (const auto& entry : fs::directory_iterator(dir)) EXPECT_EQ(entry.path(), path);
 }
 
+TEST(AtomicWrite, WrittenMapLoadsBackExactly) {
+  const std::string dir = test::freshDir();
+  MapCloud cloud;
+  cloud.resize(40000);  // more than one write chunk
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    cloud[i].x = static_cast<float>(i) * 0.25f;
+    cloud[i].y = -static_cast<float>(i) / 3.0f;
+    cloud[i].z = 1.0f + static_cast<float>(i % 97);
+    cloud[i].r = static_cast<std::uint8_t>(i);
+    cloud[i].g = static_cast<std::uint8_t>(i / 7);
+    cloud[i].b = static_cast<std::uint8_t>(255 - i % 256);
+  }
+  std::string error;
+  ASSERT_TRUE(writePcdAtomically(cloud, dir + "/map.pcd", error)) << error;
+  const MapCloud loaded = test::loadMap(dir + "/map.pcd");
+  ASSERT_EQ(loaded.size(), cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_EQ(loaded[i].getVector3fMap(), cloud[i].getVector3fMap()) << i;
+    ASSERT_EQ(loaded[i].rgba & 0xffffffu, cloud[i].rgba & 0xffffffu) << i;
+  }
+}
+
+// A file-size limit hit mid-run (the same error path as a full disk or a quota): the process is
+// not killed by SIGXFSZ; each failed checkpoint is reported naming the path and the error and
+// mapping goes on; the failed final save exits 1 saying where the last good map is, and that map
+// loads.
+TEST(AtomicWrite, FileSizeLimitMidRunIsReportedAndTheLastCheckpointLoads) {
+  const std::string dir = test::freshDir();
+  const std::string path = dir + "/map.pcd";
+  std::string output;
+  // 2 MB (4096 blocks of 512 bytes): the first checkpoints (under ~125,000 points) fit, the
+  // full map (~330,000 points, 5 MB) does not.
+  const int code = test::run(
+      "ulimit -f 4096 && exec " + test::binary() +
+          " --source tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100") + " --out " + path +
+          " --rate max -q --no-render --set checkpoint.every_keyframes=1",
+      &output);
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("checkpoint failed, mapping goes on: " + path + ": cannot write " + path +
+                        ".tmp-"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("File too large (EFBIG"), std::string::npos) << output;
+  const std::string final_failed = "final map not saved: " + path + ": cannot write ";
+  const std::size_t at = output.find(final_failed);
+  ASSERT_NE(at, std::string::npos) << output;
+  const std::string good = "; the last good map (";
+  const std::size_t good_at = output.find(good, at);
+  ASSERT_NE(good_at, std::string::npos) << output;
+  const std::size_t points = std::stoul(output.substr(good_at + good.size()));
+  EXPECT_NE(output.find(" points) is still complete at " + path, good_at), std::string::npos);
+  const MapCloud last = test::loadMap(path);
+  EXPECT_EQ(last.size(), points);
+  EXPECT_GT(last.size(), 10000u);
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
 TEST(AtomicWrite, EmptyMapIsAValidPcd) {
   const std::string dir = test::freshDir();
   std::string error;

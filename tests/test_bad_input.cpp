@@ -5,8 +5,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <opencv2/imgcodecs.hpp>
 
+#include "rgbdmap/capture/tum_sequence.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -150,13 +152,81 @@ TEST_F(BadImage, DepthOfTheWrongSize) {
 TEST_F(BadImage, NotAnImageAtAll) {
   // Must not silently reuse the previous frame's colour.
   std::ofstream(seq_ + "/rgb/1305031102.311267.png") << "this is not a picture";
-  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ + "/rgb/1305031102.311267.png: not a PNG image");
+  expectOneSkipped(seq_ + "/rgb.txt:8: " + seq_ +
+                   "/rgb/1305031102.311267.png: not an image format OpenCV can read");
 }
 
 TEST_F(BadImage, ColourWhereDepthShouldBe) {
   fs::copy_file(seq_ + "/rgb/1305031102.311267.png", seq_ + "/depth/1305031102.295279.png",
                 fs::copy_options::overwrite_existing);
-  expectOneSkipped("depth must be a 16-bit single-channel PNG");
+  expectOneSkipped(
+      "depth must be a 16-bit single-channel image (this PNG has 8-bit 3-channel pixels)");
+}
+
+// Datasets converted to the TUM layout (7-Scenes, ...) often ship JPEG colour: any format OpenCV
+// reads is colour. Depth must stay lossless 16-bit: PNG or TIFF.
+TEST_F(BadImage, JpegColourAndTiffDepthMap) {
+  const TumSequence sequence(seq_);
+  std::ofstream rgb(seq_ + "/rgb.txt"), depth(seq_ + "/depth.txt");
+  rgb << std::fixed << std::setprecision(6);
+  depth << std::fixed << std::setprecision(6);
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    const std::string jpg = fs::path(sequence[i].rgb_path).stem().string() + ".jpg";
+    ASSERT_TRUE(cv::imwrite(seq_ + "/rgb/" + jpg, cv::imread(sequence[i].rgb_path)));
+    rgb << sequence[i].rgb_time << " rgb/" << jpg << "\n";
+    std::string depth_file = "depth/" + fs::path(sequence[i].depth_path).filename().string();
+    if (i % 2 == 0) {  // every other depth image as TIFF
+      depth_file = "depth/" + fs::path(sequence[i].depth_path).stem().string() + ".tiff";
+      ASSERT_TRUE(cv::imwrite(seq_ + "/" + depth_file,
+                              cv::imread(sequence[i].depth_path, cv::IMREAD_UNCHANGED)));
+    }
+    depth << sequence[i].depth_time << " " << depth_file << "\n";
+  }
+  rgb.close();
+  depth.close();
+  const Outcome o = map(seq_, dir_);
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  const std::string stats = statsOf(dir_);
+  EXPECT_NE(stats.find("\"frames_skipped\": 0,"), std::string::npos) << stats;
+  EXPECT_GT(test::loadMap(dir_ + "/map.pcd").size(), 10000u);
+}
+
+TEST_F(BadImage, JpegDepthIsRefusedByName) {
+  const std::string path = seq_ + "/depth/1305031102.295279.png";  // depth.txt line 8
+  ASSERT_TRUE(cv::imwrite(seq_ + "/depth.jpg", cv::imread(path)));
+  fs::rename(seq_ + "/depth.jpg", path);
+  expectOneSkipped(seq_ + "/depth.txt:8: " + path +
+                   ": depth must be a 16-bit PNG or TIFF image (this is JPEG)");
+}
+
+// A run that maps no frame has failed: exit 1, saying why and how many frames each reason hit.
+TEST_F(BadImage, NothingMappedExitsNonZeroWithTheReasons) {
+  const TumSequence sequence(seq_);
+  const std::size_t frames = sequence.size();
+  fs::remove_all(seq_ + "/depth");
+  fs::create_directory(seq_ + "/depth");
+  const Outcome o = map(seq_, dir_);
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(o.output.find("nothing mapped: none of the " + std::to_string(frames) +
+                          " frames could be used:\n  " + std::to_string(frames) +
+                          " frames: depth image: cannot open image (first: " + seq_ +
+                          "/depth.txt:" + std::to_string(sequence[0].depth_line) + ": "),
+            std::string::npos)
+      << o.output;
+}
+
+TEST_F(BadImage, MostFramesUnusedIsSaidAtTheEnd) {
+  const TumSequence sequence(seq_);
+  const std::size_t removed = sequence.size() - 5;
+  for (std::size_t i = 5; i < sequence.size(); ++i) fs::remove(sequence[i].rgb_path);
+  const Outcome o = map(seq_, dir_);
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("most frames were not mapped: " + std::to_string(removed) + " of " +
+                          std::to_string(sequence.size()) + " could not be used:\n  " +
+                          std::to_string(removed) + " frames: colour image: cannot open image"),
+            std::string::npos)
+      << o.output;
+  EXPECT_GT(test::loadMap(dir_ + "/map.pcd").size(), 10000u);
 }
 
 TEST(BadInput, UnknownConfigKeyAndBadRate) {
@@ -201,7 +271,17 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
     out << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100\nHEIGHT "
            "1\nPOINTS 100\nDATA binary\nabc";
   }
-  for (const std::string& path : {garbage, truncated}) {
+  // Found by fuzz/fuzz_map_file: a NUL inside the DATA line made PCL's header reader throw,
+  // and `render` died of the uncaught exception.
+  const std::string nul_in_header = dir + "/nul_in_header.pcd";
+  {
+    std::ofstream out(nul_in_header, std::ios::binary);
+    const std::string header =
+        "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 2\n"
+        "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA";
+    out << header << '\0' << "ascii\n0 0 1 4.2e6\n1 2 3 0\n";
+  }
+  for (const std::string& path : {garbage, truncated, nul_in_header}) {
     std::string output;
     const int code =
         test::run(test::binary() + " render " + path + " --out " + dir + "/x.png", &output);

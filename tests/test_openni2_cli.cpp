@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -44,6 +45,31 @@ double statValue(const std::string& json, const std::string& name) {
   return std::stod(json.substr(at + name.size() + 3));
 }
 
+// Waits (up to `timeout_s`) for `condition`, checking every 50 ms: tests wait for what they need
+// to see, never for a fixed time.
+bool waitUntil(const std::function<bool()>& condition, double timeout_s = 120) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return true;
+}
+
+// Lines of a TUM list that name a frame (not comments).
+std::size_t listedFrames(const std::string& path) {
+  std::ifstream in(path);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty() && line[0] != '#';
+  return n;
+}
+
+std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 // Every listed image of a recorded folder exists, decodes, and the two lists
 // pair one to one.
 void expectCompleteRecording(const std::string& dir, std::size_t expected_frames) {
@@ -64,21 +90,10 @@ void expectCompleteRecording(const std::string& dir, std::size_t expected_frames
 
 bool cameraAttached() { return scanUsbCameras().anyCamera(); }
 
-std::size_t occurrences(const std::string& text, const std::string& what) {
-  std::size_t count = 0;
-  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
-  return count;
-}
-
-// Waits (polling, up to `timeout_s`) until the log at `path` contains `text` `count` times.
+// Waits (up to `timeout_s`) until the log at `path` contains `text` `count` times.
 bool waitForLog(const std::string& path, const std::string& text, double timeout_s,
                 std::size_t count = 1) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (occurrences(test::readFile(path), text) >= count) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return false;
+  return waitUntil([&] { return occurrences(test::readFile(path), text) >= count; }, timeout_s);
 }
 
 // `env -i` with only the sanitizers' settings kept: what a user's shell with no OpenNI2 or
@@ -217,12 +232,12 @@ TEST(OpenNI2Cli, RecordFromATumFolderWritesTheSameImages) {
 TEST(OpenNI2Cli, RecordStopsCleanlyOnSigintWithCompleteLists) {
   const std::string base = test::freshDir();
   const std::string dir = base + "/interrupted";
-  // At the recorded speed the 100 frames take about 3.3 s; interrupt once six
-  // are listed (three comment lines come first).
+  // At the recorded speed the 100 frames take about 3.3 s; interrupt once a few are recorded.
   test::Process record({test::binary(), "record", "--source", "tum:" + test::tumDir(kRpy), "--out",
                         dir, "--set", "replay.rate=1"},
                        base + "/record.log");
-  EXPECT_TRUE(waitForLog(dir + "/rgb.txt", ".png", 120, 6)) << test::readFile(base + "/record.log");
+  ASSERT_TRUE(waitUntil([&] { return listedFrames(dir + "/rgb.txt") > 5 || !record.running(); }))
+      << test::readFile(base + "/record.log");
   record.signal(SIGINT);
   const int code = record.wait(30);
   const std::string log = test::readFile(base + "/record.log");
@@ -315,16 +330,19 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   ASSERT_EQ(code, 0) << log;
   const std::string stats = test::readFile(dir + "/stats.json");
   EXPECT_GE(statValue(stats, "disconnects"), 1) << log;
-  // A live device keeps its own pace: a frame may be lost while the streams
-  // restart, so the count is bounded rather than exact; more than 12 means
-  // capture resumed after the unplug.
-  const double captured = statValue(stats, "frames_captured");
-  EXPECT_GT(captured, 12) << log;
-  EXPECT_GE(captured, TumSequence(test::tumDir(kXyz)).size() - 4.0) << log;
-  EXPECT_LE(captured, TumSequence(test::tumDir(kXyz)).size()) << log;
-  // Keyframes every 10th frame: the third one comes after the unplug, so
-  // mapping resumed.
-  EXPECT_GE(statValue(stats, "keyframes"), 3) << log;
+  // A live device keeps its own pace: frames a busy reader misses, or that play while the
+  // streams restart, are lost, so how many are captured depends on the machine. What must hold:
+  // a frame the device played after the unplug (the 13th onwards) was mapped.
+  const TumSequence sequence(test::tumDir(kXyz));
+  EXPECT_LE(statValue(stats, "frames_captured"), sequence.size()) << log;
+  double last_keyframe = 0;
+  {
+    std::ifstream keyframes(dir + "/map_keyframes.txt");
+    for (std::string line; std::getline(keyframes, line);)
+      if (!line.empty() && line[0] != '#') last_keyframe = std::stod(line);
+  }
+  EXPECT_GT(last_keyframe, sequence[11].rgb_time + 1e-4)
+      << "nothing mapped after the unplug: " << log;
   // Nothing mapped before the unplug is lost: the checkpoint written when the camera went away
   // (and every later one) holds no more points than the final map.
   const std::size_t final_points = test::loadMap(dir + "/map.pcd").size();

@@ -100,38 +100,59 @@ std::string TumSequence::presetForFolder(const std::string& folder) {
   return (n >= '1' && n <= '3') ? std::string("tum_fr") + n : "";
 }
 
-bool TumSequence::readImage(const std::string& path, int flags, cv::Mat& out, std::string& error) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) {
-    error = path + ": cannot open image";
+namespace {
+
+// The container format from the first bytes, for messages and for the depth rule.
+std::string imageFormat(const std::vector<unsigned char>& bytes) {
+  const auto starts = [&](std::initializer_list<unsigned char> sig) {
+    return bytes.size() >= sig.size() && std::equal(sig.begin(), sig.end(), bytes.begin());
+  };
+  if (starts({0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'})) return "PNG";
+  if (starts({'I', 'I', '*', 0}) || starts({'M', 'M', 0, '*'})) return "TIFF";
+  if (starts({0xff, 0xd8, 0xff})) return "JPEG";
+  if (starts({'B', 'M'})) return "BMP";
+  return "";
+}
+
+}  // namespace
+
+bool TumSequence::readImage(const std::string& path, ImageKind kind, cv::Mat& out,
+                            std::string& error) {
+  const std::string what = kind == ImageKind::kDepth ? "depth image" : "colour image";
+  const auto fail = [&](const std::string& reason, const std::string& detail) {
+    error = path + ": " + reason + detail;
+    failure_reason_ = what + ": " + reason;
     return false;
-  }
+  };
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return fail("cannot open image", "");
   const std::streamsize size = in.tellg();
   in.seekg(0);
   file_buffer_.resize(static_cast<std::size_t>(std::max<std::streamsize>(size, 0)));
-  if (size <= 0 || !in.read(reinterpret_cast<char*>(file_buffer_.data()), size)) {
-    error = path + ": empty or unreadable image";
-    return false;
-  }
-  // TUM images are PNG. Checking the signature also matters because imdecode leaves `out`
-  // untouched (holding the previous frame) when no decoder recognises the data.
-  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (file_buffer_.size() < 8 ||
-      !std::equal(kPngSignature, kPngSignature + 8, file_buffer_.begin())) {
-    error = path + ": not a PNG image";
-    return false;
-  }
+  if (size <= 0 || !in.read(reinterpret_cast<char*>(file_buffer_.data()), size))
+    return fail("empty or unreadable image", "");
+  const std::string format = imageFormat(file_buffer_);
+  // Depth is 16-bit: only PNG and TIFF hold it losslessly. Colour may be anything OpenCV reads
+  // (datasets converted to the TUM layout often ship JPEG). The format is checked before
+  // decoding also because imdecode leaves `out` untouched (holding the previous frame) when no
+  // decoder recognises the data.
+  if (kind == ImageKind::kDepth && format != "PNG" && format != "TIFF")
+    return fail("depth must be a 16-bit PNG or TIFF image",
+                format.empty() ? "" : " (this is " + format + ")");
+  if (kind == ImageKind::kColor && format.empty() && !cv::haveImageReader(path))
+    return fail("not an image format OpenCV can read", "");
   try {
     // Decoding into `out` reuses its buffer when the size and type match.
-    cv::imdecode(file_buffer_, flags, &out);
+    cv::imdecode(file_buffer_, kind == ImageKind::kDepth ? cv::IMREAD_UNCHANGED : cv::IMREAD_COLOR,
+                 &out);
   } catch (const cv::Exception& e) {
-    error = path + ": cannot decode image (" + e.err + ")";
-    return false;
+    return fail("cannot decode image", " (" + e.err + ")");
   }
-  if (out.empty()) {
-    error = path + ": cannot decode image (corrupt or truncated)";
-    return false;
-  }
+  if (out.empty()) return fail("cannot decode image (corrupt or truncated)", "");
+  if (kind == ImageKind::kDepth && out.type() != CV_16UC1)
+    return fail("depth must be a 16-bit single-channel image",
+                " (this " + format + " has " + std::to_string(out.elemSize1() * 8) + "-bit " +
+                    std::to_string(out.channels()) + "-channel pixels)");
   return true;
 }
 
@@ -139,15 +160,11 @@ bool TumSequence::load(std::size_t i, Frame& frame, std::string& error) {
   const TumEntry& e = entries_.at(i);
   const std::string rgb_where = where(folder_ + "/rgb.txt", e.rgb_line);
   const std::string depth_where = where(folder_ + "/depth.txt", e.depth_line);
-  if (!readImage(e.depth_path, cv::IMREAD_UNCHANGED, raw_depth_, error)) {
+  if (!readImage(e.depth_path, ImageKind::kDepth, raw_depth_, error)) {
     error = depth_where + ": " + error;
     return false;
   }
-  if (raw_depth_.type() != CV_16UC1) {
-    error = depth_where + ": " + e.depth_path + ": depth must be a 16-bit single-channel PNG";
-    return false;
-  }
-  if (!readImage(e.rgb_path, cv::IMREAD_COLOR, frame.color, error)) {
+  if (!readImage(e.rgb_path, ImageKind::kColor, frame.color, error)) {
     error = rgb_where + ": " + error;
     return false;
   }
@@ -155,6 +172,7 @@ bool TumSequence::load(std::size_t i, Frame& frame, std::string& error) {
     error = depth_where + ": " + e.depth_path + ": depth is " + std::to_string(raw_depth_.cols) +
             "x" + std::to_string(raw_depth_.rows) + " but colour " + e.rgb_path + " is " +
             std::to_string(frame.color.cols) + "x" + std::to_string(frame.color.rows);
+    failure_reason_ = "depth and colour images differ in size";
     return false;
   }
   raw_depth_.convertTo(frame.depth, CV_32F, 1.0 / options_.depth_scale);

@@ -32,13 +32,16 @@ ReadStatus TumSource::read(Frame& frame) {
   std::string error;
   if (!sequence_.load(i, frame, error)) {
     spdlog::warn("skipping frame {}: {}", i, error);
+    reasons_.add(sequence_.failureReason(), error);
     ++skipped_;
     return ReadStatus::kSkipped;
   }
   if (frame.depth.cols != camera_.width || frame.depth.rows != camera_.height) {
-    spdlog::warn("skipping frame {}: {}: image is {}x{} but the camera is configured as {}x{}", i,
-                 sequence_[i].depth_path, frame.depth.cols, frame.depth.rows, camera_.width,
-                 camera_.height);
+    error = sequence_[i].depth_path + ": image is " + std::to_string(frame.depth.cols) + "x" +
+            std::to_string(frame.depth.rows) + " but the camera is configured as " +
+            std::to_string(camera_.width) + "x" + std::to_string(camera_.height);
+    spdlog::warn("skipping frame {}: {}", i, error);
+    reasons_.add("image size differs from camera.width x camera.height", error);
     ++skipped_;
     return ReadStatus::kSkipped;
   }

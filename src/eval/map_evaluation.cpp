@@ -38,23 +38,31 @@ pcl::PCLPointCloud2 loadCloudBlob(const std::string& path, const char* what) {
   if (!isFile(path)) throw InputError(path + ": no such file (" + what + ")");
   pcl::PCLPointCloud2 blob;
   int result = -1;
-  if (endsWith(path, ".ply")) {
-    result = pcl::io::loadPLYFile(path, blob);
-  } else if (endsWith(path, ".pcd")) {
-    // PCL 1.13's reader crashes on a file whose header declares no fields, so the header is
-    // checked first; a header with no points is an empty cloud.
-    pcl::PCDReader reader;
-    Eigen::Vector4f origin;
-    Eigen::Quaternionf orientation;
-    int version = 0, data_type = 0;
-    unsigned int data_index = 0;
-    if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) < 0 ||
-        blob.fields.empty())
-      throw InputError(path + ": not a PCD file (no valid header with FIELDS)");
-    if (blob.width * blob.height == 0) return blob;
-    result = reader.read(path, blob);
-  } else {
-    throw InputError(path + ": unknown point cloud format (expected .pcd or .ply)");
+  // PCL's readers throw on some malformed headers (a number that is not one): a bad file, not
+  // a crash (found by fuzz/fuzz_map_file).
+  try {
+    if (endsWith(path, ".ply")) {
+      result = pcl::io::loadPLYFile(path, blob);
+    } else if (endsWith(path, ".pcd")) {
+      // PCL 1.13's reader crashes on a file whose header declares no fields, so the header is
+      // checked first; a header with no points is an empty cloud.
+      pcl::PCDReader reader;
+      Eigen::Vector4f origin;
+      Eigen::Quaternionf orientation;
+      int version = 0, data_type = 0;
+      unsigned int data_index = 0;
+      if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) < 0 ||
+          blob.fields.empty())
+        throw InputError(path + ": not a PCD file (no valid header with FIELDS)");
+      if (blob.width * blob.height == 0) return blob;
+      result = reader.read(path, blob);
+    } else {
+      throw InputError(path + ": unknown point cloud format (expected .pcd or .ply)");
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path + ": not a valid " + std::string(what) + " (" + e.what() + ")");
   }
   if (result < 0) throw InputError(path + ": cannot read the " + std::string(what));
   bool x = false, y = false, z = false;

@@ -4,63 +4,104 @@
 #include <pcl/io/pcd_io.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <vector>
 
 namespace rgbdmap {
 namespace {
-
-bool fsyncPath(const std::string& path, int flags) {
-  const int fd = ::open(path.c_str(), flags);
-  if (fd < 0) return false;
-  const bool ok = ::fsync(fd) == 0;
-  ::close(fd);
-  return ok;
-}
 
 std::string folderOf(const std::string& path) {
   const auto slash = path.find_last_of('/');
   return slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
 }
 
+// "File too large (EFBIG)": the symbolic name for the errors a user can act on.
+std::string describeErrno(int error) {
+  std::string text = std::strerror(error);
+  switch (error) {
+    case EFBIG:
+      return text + " (EFBIG: a file-size limit, ulimit -f)";
+    case ENOSPC:
+      return text + " (ENOSPC)";
+    case EDQUOT:
+      return text + " (EDQUOT)";
+    case EROFS:
+      return text + " (EROFS)";
+    case EACCES:
+      return text + " (EACCES)";
+    default:
+      return text;
+  }
+}
+
+// Writes all of `size` bytes; false with errno set on any failure (a full disk, a quota, a
+// file-size limit: SIGXFSZ is ignored, so the write fails with EFBIG instead of killing us).
+bool writeAll(int fd, const char* data, std::size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// Binary PCD with fields x y z rgb (16 bytes a point), written with plain write() calls so that
+// every failure comes back as an errno (PCL's writer maps the file, where a full disk is a
+// SIGBUS).
+bool writePcd(const MapCloud& cloud, int fd) {
+  const std::string header =
+      pcl::PCDWriter::generateHeader<pcl::PointXYZRGB>(cloud, static_cast<int>(cloud.size())) +
+      "DATA binary\n";
+  if (!writeAll(fd, header.data(), header.size())) return false;
+  constexpr std::size_t kPointBytes = 16;
+  constexpr std::size_t kChunk = 16384;
+  std::vector<char> buffer(kChunk * kPointBytes);
+  for (std::size_t first = 0; first < cloud.size(); first += kChunk) {
+    const std::size_t count = std::min(kChunk, cloud.size() - first);
+    char* out = buffer.data();
+    for (std::size_t i = first; i < first + count; ++i, out += kPointBytes) {
+      const pcl::PointXYZRGB& p = cloud.points[i];
+      std::memcpy(out, &p.x, 4);
+      std::memcpy(out + 4, &p.y, 4);
+      std::memcpy(out + 8, &p.z, 4);
+      std::memcpy(out + 12, &p.rgba, 4);
+    }
+    if (!writeAll(fd, buffer.data(), count * kPointBytes)) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error) {
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  int status = -1;
-  try {
-    if (cloud.empty()) {
-      // PCL refuses to write an empty cloud; an empty map is still a valid answer.
-      const std::string header =
-          pcl::PCDWriter::generateHeader<pcl::PointXYZRGB>(cloud, 0) + "DATA binary\n";
-      FILE* f = std::fopen(tmp.c_str(), "wb");
-      status = (f && std::fwrite(header.data(), 1, header.size(), f) == header.size()) ? 0 : -1;
-      if (f && std::fclose(f) != 0) status = -1;
-    } else {
-      status = pcl::io::savePCDFileBinary(tmp, cloud);
-    }
-  } catch (const std::exception& e) {
-    error = path + ": cannot write map: " + std::strerror(errno) + " (" + e.what() + ")";
+  const auto fail = [&](const std::string& what, int fd) {
+    const int saved = errno;
+    error = path + ": " + what + " " + tmp + ": " + describeErrno(saved);
+    if (fd >= 0) ::close(fd);
     std::remove(tmp.c_str());
     return false;
+  };
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return fail("cannot create", -1);
+  if (!writePcd(cloud, fd)) return fail("cannot write", fd);
+  if (::fsync(fd) != 0) return fail("cannot fsync", fd);  // ENOSPC may only show here (NFS)
+  if (::close(fd) != 0) return fail("cannot close", -1);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) return fail("cannot rename into place", -1);
+  // Makes the rename itself durable; the map is complete either way.
+  const int folder = ::open(folderOf(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (folder >= 0) {
+    ::fsync(folder);
+    ::close(folder);
   }
-  if (status != 0) {
-    error = path + ": cannot write map to " + tmp + " (" + std::strerror(errno) + ")";
-    std::remove(tmp.c_str());
-    return false;
-  }
-  if (!fsyncPath(tmp, O_RDONLY)) {
-    error = path + ": fsync of " + tmp + " failed (" + std::strerror(errno) + ")";
-    std::remove(tmp.c_str());
-    return false;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    error = path + ": cannot rename " + tmp + " into place (" + std::strerror(errno) + ")";
-    std::remove(tmp.c_str());
-    return false;
-  }
-  fsyncPath(folderOf(path), O_RDONLY | O_DIRECTORY);  // makes the rename itself durable
   return true;
 }
 
@@ -111,6 +152,14 @@ void CheckpointWriter::run() {
     result.points = cloud->size();
     const auto start = std::chrono::steady_clock::now();
     result.ok = writePcdAtomically(*cloud, path, result.error);
+    // The destination still holds the last complete map (or nothing): say which.
+    if (result.ok)
+      last_good_ = result;
+    else if (last_good_.ok && last_good_.path == path)
+      result.error += "; the last good map (" + std::to_string(last_good_.points) +
+                      " points) is still complete at " + path;
+    else
+      result.error += "; no complete map has been written to " + path + " yet";
     for (const TrajectoryFile& t : trajectories) {
       try {
         t.trajectory->save(t.path);

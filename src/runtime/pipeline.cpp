@@ -15,6 +15,7 @@
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
+#include "rgbdmap/runtime/unmapped_frames.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -268,6 +269,10 @@ int Pipeline::run(RunControl& control) {
     spdlog::error("{}", fatal);
     exit_code = 1;
   }
+  // Nothing mapped is a failure; most frames unused is worth saying.
+  const bool stopped_on_request = control.stop.load() && fatal.empty();
+  exit_code = std::max(
+      exit_code, UnmappedFrames::of(stats_, source_->skipReasons()).report(stopped_on_request));
   return exit_code;
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/skip_reasons.hpp"
 
 namespace rgbdmap {
 
@@ -32,6 +33,8 @@ class FrameSource {
   virtual std::string describe() const = 0;
   // Frames the source itself had to skip (missing/corrupt images, no ground truth, ...).
   virtual std::uint64_t skipped() const { return 0; }
+  // Those skipped frames by reason, for the end-of-run summary (empty: no reasons kept).
+  virtual std::vector<SkipReasons::Entry> skipReasons() const { return {}; }
   // Whether a kTimeout may be followed by a reconnect (a live camera that was unplugged).
   virtual bool canReconnect() const { return false; }
   // One attempt to get the same camera back after kTimeout; may block for up to about a second.

@@ -49,13 +49,18 @@ class TumSequence {
   // "tum_fr1", "tum_fr2", "tum_fr3" from a folder named rgbd_dataset_freiburgN_..., or "".
   static std::string presetForFolder(const std::string& folder);
 
-  // Decodes entry i into `frame` (depth in metres, colour BGR), reusing its buffers. On a
-  // missing, corrupt or mis-sized image returns false and sets `error` to a message naming
-  // the file and the list line that refers to it.
+  // Decodes entry i into `frame` (depth in metres, colour BGR), reusing its buffers. Colour may
+  // be in any format OpenCV reads; depth must be a 16-bit PNG or TIFF. On a missing, corrupt,
+  // mis-typed or mis-sized image returns false and sets `error` to a message naming the file
+  // and the list line that refers to it.
   bool load(std::size_t i, Frame& frame, std::string& error);
+  // Why the last load() failed, without file names ("colour image: cannot open image"), so that
+  // failures can be counted by kind.
+  const std::string& failureReason() const { return failure_reason_; }
 
  private:
-  bool readImage(const std::string& path, int flags, cv::Mat& out, std::string& error);
+  enum class ImageKind { kColor, kDepth };
+  bool readImage(const std::string& path, ImageKind kind, cv::Mat& out, std::string& error);
 
   std::string folder_;
   Options options_;
@@ -65,6 +70,7 @@ class TumSequence {
   std::size_t unmatched_depth_ = 0;
   std::vector<unsigned char> file_buffer_;  // reused between loads
   cv::Mat raw_depth_;                       // 16-bit depth as decoded, reused
+  std::string failure_reason_;
 };
 
 }  // namespace rgbdmap

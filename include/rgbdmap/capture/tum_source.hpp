@@ -22,6 +22,7 @@ class TumSource : public FrameSource {
   bool providesPoses() const override { return sequence_.hasGroundtruth(); }
   std::string describe() const override;
   std::uint64_t skipped() const override { return skipped_; }
+  std::vector<SkipReasons::Entry> skipReasons() const override { return reasons_.entries(); }
   const TumSequence& sequence() const { return sequence_; }
 
  private:
@@ -30,6 +31,7 @@ class TumSource : public FrameSource {
   double rate_;
   std::size_t next_ = 0;
   std::uint64_t skipped_ = 0;
+  SkipReasons reasons_;
   std::chrono::steady_clock::time_point start_;
 };
 

@@ -16,7 +16,8 @@ namespace rgbdmap {
 
 // Writes a cloud as binary PCD so that the destination only ever holds a complete file:
 // write "<path>.tmp-<pid>", fsync it, rename over the destination, fsync the folder.
-// Returns false with `error` set when anything fails (the temp file is removed).
+// Returns false with `error` naming the path and the system error (EFBIG, ENOSPC, EDQUOT,
+// EROFS, ...) when anything fails; the temp file is removed and the destination left as it was.
 bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error);
 
 // A background thread that writes map snapshots while mapping goes on. Only the newest pending
@@ -60,6 +61,7 @@ class CheckpointWriter {
   bool busy_ = false;
   bool stop_ = false;
   Result last_;
+  Result last_good_;  // the writer thread's own: the last write that succeeded
   std::atomic<std::uint64_t> written_{0}, failed_{0};
   std::thread thread_;
 };
