@@ -131,6 +131,7 @@ int Pipeline::run(RunControl& control) {
   });
 
   std::atomic<bool> mapping_done{false};
+  MapPublication publication(outputs_.publisher);
   std::thread mapping([&] {
     double last_checkpoint = now();
     std::uint64_t keyframes_at_checkpoint = 0;
@@ -140,7 +141,8 @@ int Pipeline::run(RunControl& control) {
       if (Frame* frame = queue.pop(std::chrono::milliseconds(100), finished)) {
         stats_.queue_latency.record(now() - frame->captured_at);
         try {
-          mapper.process(*frame);
+          const bool keyframe = mapper.process(*frame);
+          publication.afterFrame(*frame, mapper, stats_, keyframe);
         } catch (const std::exception& e) {
           error.set(std::string(frame->origin) + ": " + e.what());
           control.stop.store(true);
@@ -195,7 +197,9 @@ int Pipeline::run(RunControl& control) {
   if (tty) std::fprintf(stderr, "\r%s\033[K\n", statusLine(stats_, stats_.wall_seconds).c_str());
 
   // Final save, through the writer so it is ordered after any checkpoint in flight.
-  writer.submit(mapper.snapshot(), outputs_.map_path);
+  const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
+  writer.submit(final_map, outputs_.map_path);
+  publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
   if (!final_write.ok) {
