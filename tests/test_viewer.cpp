@@ -1,19 +1,13 @@
 // The live viewer: what it draws (decimation, height colours), how frames reach it without the
 // mapping thread waiting, and the window itself under Xvfb (opens, shows the map's colours, q and
 // closing the window both save and exit 0), and mapping without a display.
-#include <X11/Xlib.h>
-#include <X11/Xutil.h>
-#include <X11/keysym.h>
 #include <gtest/gtest.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <thread>
 
@@ -21,6 +15,7 @@
 #include "rgbdmap/viewer/display_cloud.hpp"
 #include "rgbdmap/viewer/viewer_mailbox.hpp"
 #include "test_support.hpp"
+#include "xvfb_server.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -29,6 +24,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
 const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::XWindow;
 
 MapCloud line(int n) {
   MapCloud cloud;
@@ -138,129 +134,9 @@ bool logHas(const std::string& path, const std::string& text) {
   return test::readFile(path).find(text) != std::string::npos;
 }
 
-int ignoreXErrors(Display*, XErrorEvent*) { return 0; }  // e.g. a window that just closed
-
-// An X server of our own for the suite: Xvfb tells the display number it chose on a pipe once
-// it accepts connections.
-class XvfbServer {
- public:
-  XvfbServer() {
-    if (test::run("command -v Xvfb >/dev/null 2>&1") != 0) {
-      why_ = "Xvfb is not installed (Debian package xvfb; scripts/setup.sh installs it)";
-      return;
-    }
-    int fds[2];
-    if (::pipe(fds) != 0) return;
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      ::close(fds[0]);
-      const std::string fd = std::to_string(fds[1]);
-      ::execlp("Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1280x800x24", "-nolisten",
-               "tcp", static_cast<char*>(nullptr));
-      std::_Exit(127);
-    }
-    ::close(fds[1]);
-    std::string number;
-    pollfd p{fds[0], POLLIN, 0};
-    char c = 0;
-    while (::poll(&p, 1, 30'000) == 1 && ::read(fds[0], &c, 1) == 1 && c != '\n') number += c;
-    ::close(fds[0]);
-    if (number.empty()) {
-      why_ = "Xvfb did not start";
-      return;
-    }
-    display_name_ = ":" + number;
-    ::setenv("DISPLAY", display_name_.c_str(), 1);
-    XSetErrorHandler(ignoreXErrors);
-    display_ = XOpenDisplay(display_name_.c_str());
-    if (!display_) why_ = "cannot connect to Xvfb on " + display_name_;
-  }
-  ~XvfbServer() {
-    if (display_) XCloseDisplay(display_);
-    if (pid_ > 0) {
-      ::kill(pid_, SIGTERM);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  bool ok() const { return display_ != nullptr; }
-  const std::string& why() const { return why_; }
-  Display* display() const { return display_; }
-
-  // The top-level window whose title starts with `prefix`, or 0.
-  Window findWindow(const std::string& prefix) const {
-    Window root = DefaultRootWindow(display_), parent = 0, *children = nullptr;
-    unsigned int count = 0;
-    Window found = 0;
-    if (!XQueryTree(display_, root, &root, &parent, &children, &count)) return 0;
-    for (unsigned int i = 0; i < count && !found; ++i) {
-      char* name = nullptr;
-      if (XFetchName(display_, children[i], &name) && name) {
-        if (std::string(name).rfind(prefix, 0) == 0) found = children[i];
-        XFree(name);
-      }
-    }
-    if (children) XFree(children);
-    return found;
-  }
-
-  void pressKey(Window window, KeySym key) const {
-    XEvent e{};
-    e.xkey.type = KeyPress;
-    e.xkey.display = display_;
-    e.xkey.window = window;
-    e.xkey.root = DefaultRootWindow(display_);
-    e.xkey.time = CurrentTime;
-    e.xkey.x = e.xkey.y = 10;
-    e.xkey.same_screen = True;
-    e.xkey.keycode = XKeysymToKeycode(display_, key);
-    XSendEvent(display_, window, True, KeyPressMask, &e);
-    e.xkey.type = KeyRelease;
-    XSendEvent(display_, window, True, KeyReleaseMask, &e);
-    XFlush(display_);
-  }
-
-  // What a window manager sends when the user clicks the close button.
-  void closeWindow(Window window) const {
-    XEvent e{};
-    e.xclient.type = ClientMessage;
-    e.xclient.window = window;
-    e.xclient.message_type = XInternAtom(display_, "WM_PROTOCOLS", False);
-    e.xclient.format = 32;
-    e.xclient.data.l[0] = static_cast<long>(XInternAtom(display_, "WM_DELETE_WINDOW", False));
-    e.xclient.data.l[1] = CurrentTime;
-    XSendEvent(display_, window, False, NoEventMask, &e);
-    XFlush(display_);
-  }
-
-  // The window's pixels as BGR.
-  cv::Mat screenshot(Window window) const {
-    XWindowAttributes a{};
-    if (!XGetWindowAttributes(display_, window, &a)) return {};
-    XImage* image = XGetImage(display_, window, 0, 0, static_cast<unsigned>(a.width),
-                              static_cast<unsigned>(a.height), AllPlanes, ZPixmap);
-    if (!image) return {};
-    cv::Mat bgr(a.height, a.width, CV_8UC3);
-    for (int y = 0; y < a.height; ++y)
-      for (int x = 0; x < a.width; ++x) {
-        const unsigned long pixel = XGetPixel(image, x, y);
-        bgr.at<cv::Vec3b>(y, x) = {static_cast<std::uint8_t>(pixel & image->blue_mask),
-                                   static_cast<std::uint8_t>((pixel & image->green_mask) >> 8),
-                                   static_cast<std::uint8_t>((pixel & image->red_mask) >> 16)};
-      }
-    XDestroyImage(image);
-    return bgr;
-  }
-
- private:
-  pid_t pid_ = -1;
-  std::string display_name_;
-  std::string why_;
-  Display* display_ = nullptr;
-};
-
 class ViewerWindow : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { server_ = new XvfbServer(); }
+  static void SetUpTestSuite() { server_ = new test::XvfbServer(); }
   static void TearDownTestSuite() {
     delete server_;
     server_ = nullptr;
@@ -270,8 +146,8 @@ class ViewerWindow : public ::testing::Test {
   }
 
   // Waits for the viewer's window and for the map to be drawn in it.
-  Window waitForMapOnScreen(const std::string& log, const std::string& title) {
-    Window window = 0;
+  XWindow waitForMapOnScreen(const std::string& log, const std::string& title) {
+    XWindow window = 0;
     EXPECT_TRUE(waitFor([&] { return logHas(log, "viewer: map on screen"); }, 120s))
         << test::readFile(log);
     EXPECT_TRUE(waitFor([&] { return (window = server_->findWindow(title)) != 0; }, 30s));
@@ -309,19 +185,19 @@ class ViewerWindow : public ::testing::Test {
             "checkpoint.every_keyframes=0", "--set", "checkpoint.every_seconds=0"};
   }
 
-  static XvfbServer* server_;
+  static test::XvfbServer* server_;
 };
-XvfbServer* ViewerWindow::server_ = nullptr;
+test::XvfbServer* ViewerWindow::server_ = nullptr;
 
 TEST_F(ViewerWindow, ReplayShowsTheMapAndQSavesAndExits) {
   const std::string dir = test::freshDir();
   const std::string log = dir + "/log.txt";
   test::Process p(replay(dir), log);
-  const Window window = waitForMapOnScreen(log, "rgbdmap: " + dir + "/map.pcd");
+  const XWindow window = waitForMapOnScreen(log, "rgbdmap: " + dir + "/map.pcd");
   ASSERT_NE(window, 0u) << test::readFile(log);
   const cv::Mat shot = server_->screenshot(window);
   cv::imwrite(dir + "/screenshot.png", shot);
-  server_->pressKey(window, XK_q);
+  server_->pressKey(window, 'q');
   EXPECT_EQ(p.wait(120), 0) << test::readFile(log);
   const std::string text = test::readFile(log);
   EXPECT_NE(text.find("viewer: q pressed"), std::string::npos) << text;
@@ -334,7 +210,7 @@ TEST_F(ViewerWindow, ClosingTheWindowSavesAndExits) {
   const std::string dir = test::freshDir();
   const std::string log = dir + "/log.txt";
   test::Process p(replay(dir), log);
-  const Window window = waitForMapOnScreen(log, "rgbdmap: " + dir + "/map.pcd");
+  const XWindow window = waitForMapOnScreen(log, "rgbdmap: " + dir + "/map.pcd");
   ASSERT_NE(window, 0u) << test::readFile(log);
   server_->closeWindow(window);
   EXPECT_EQ(p.wait(120), 0) << test::readFile(log);
@@ -351,7 +227,7 @@ TEST_F(ViewerWindow, ViewOpensASavedMapWithItsTrajectory) {
             0);
   const std::string log = dir + "/view.txt";
   test::Process p({test::binary(), "view", dir + "/map.pcd"}, log);
-  const Window window = waitForMapOnScreen(log, "rgbdmap: " + dir + "/map.pcd");
+  const XWindow window = waitForMapOnScreen(log, "rgbdmap: " + dir + "/map.pcd");
   ASSERT_NE(window, 0u) << test::readFile(log);
   expectMapColours(server_->screenshot(window), test::loadMap(dir + "/map.pcd"));
   EXPECT_TRUE(logHas(log, "poses from " + dir + "/map_keyframes.txt")) << test::readFile(log);

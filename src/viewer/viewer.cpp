@@ -1,6 +1,8 @@
 #include "rgbdmap/viewer/viewer.hpp"
 
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
 #include <vtkActor.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCamera.h>
@@ -410,6 +412,9 @@ void Viewer::waitUntilClosed() {
 }
 
 void Viewer::run() {
+  // Drawing yields the CPU to mapping; Mesa's software rasteriser threads, started from this
+  // thread, inherit the niceness.
+  if (options_.nice > 0) ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), options_.nice);
   try {
     Scene scene(options_);
     spdlog::info("viewer: window open ({}x{})", options_.width, options_.height);

@@ -17,7 +17,8 @@ struct ViewerOptions {
   int height = 720;
   std::size_t max_points = 2'000'000;  // drawn at most; bigger maps are decimated
   double refresh_hz = 30.0;
-  bool follow = true;                 // the view follows the camera (key f toggles)
+  int nice = 10;       // the viewer thread's niceness: mapping comes first when the CPU is short
+  bool follow = true;  // the view follows the camera (key f toggles)
   std::function<void()> on_snapshot;  // key s
   std::function<void()> on_stop;      // key q, or the window was closed
 };
