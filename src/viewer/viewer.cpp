@@ -297,12 +297,13 @@ class Scene {
   // Behind and above the camera, looking where it looks.
   void followCamera() {
     vtkCamera* camera = map_renderer_->GetActiveCamera();
-    const Eigen::Vector3d eye = pose_ * Eigen::Vector3d(0, -0.4, -1.2);
+    const Eigen::Vector3d eye = pose_ * Eigen::Vector3d(0, -0.6, -2.0);
     const Eigen::Vector3d target = pose_ * Eigen::Vector3d(0, 0, 1.5);
     const Eigen::Vector3d up = pose_.linear() * Eigen::Vector3d(0, -1, 0);
     camera->SetPosition(eye.x(), eye.y(), eye.z());
     camera->SetFocalPoint(target.x(), target.y(), target.z());
     camera->SetViewUp(up.x(), up.y(), up.z());
+    camera->SetViewAngle(50.0);  // wide enough for what a Kinect sees from 2 m behind it
   }
 
   void updateStatus() {
