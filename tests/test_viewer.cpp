@@ -119,6 +119,40 @@ TEST(ViewerMailbox, WantsAMapOnlyAfterTakingTheLastOne) {
   EXPECT_TRUE(mailbox.wantsMap());
 }
 
+TEST(ViewerMailbox, AViewerTakingConcurrentlyGetsEveryPoseInOrderAndTheLastMap) {
+  ViewerMailbox mailbox;
+  constexpr int kFrames = 5000;
+  std::thread mapping([&] {
+    PublishedStatus status;
+    for (int i = 0; i < kFrames; ++i) {
+      status.frames_processed = static_cast<std::uint64_t>(i + 1);
+      mailbox.publishFrame(frameWithColor(static_cast<std::uint8_t>(i % 200), i, true), status);
+      if (i % 500 == 499 && mailbox.wantsMap())
+        mailbox.publishMap(std::make_shared<MapCloud>(line(i)));
+    }
+    mailbox.publishMap(std::make_shared<MapCloud>(line(kFrames)));
+  });
+  std::vector<double> seen;
+  std::size_t last_map = 0;
+  ViewerUpdate update;
+  while (last_map != static_cast<std::size_t>(kFrames)) {
+    if (!mailbox.take(update)) {
+      std::this_thread::yield();
+      continue;
+    }
+    for (const TrajectoryPoint& p : update.new_points) seen.push_back(p.position.x());
+    if (update.map) last_map = update.map->size();
+    if (update.has_images) {
+      EXPECT_EQ(update.color.rows, 48);
+    }
+  }
+  mapping.join();
+  if (mailbox.take(update))
+    for (const TrajectoryPoint& p : update.new_points) seen.push_back(p.position.x());
+  ASSERT_EQ(seen.size(), static_cast<std::size_t>(kFrames));
+  for (int i = 0; i < kFrames; ++i) ASSERT_EQ(seen[static_cast<std::size_t>(i)], i);
+}
+
 // --- The window, under Xvfb -------------------------------------------------------------------
 
 bool waitFor(const std::function<bool()>& condition, std::chrono::seconds timeout) {
