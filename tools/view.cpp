@@ -2,6 +2,8 @@
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
+#include <filesystem>
+
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
 #include "rgbdmap/tools/commands.hpp"
@@ -83,7 +85,7 @@ void addViewCommand(CLI::App& app, Command& selected) {
       const std::vector<TrajectoryPoint> trajectory = savedTrajectory(*map, first);
       ViewerOptions options;
       options.title = "rgbdmap: " + *map;
-      options.caption = *map;
+      options.caption = std::filesystem::path(*map).filename().string();
       options.follow = false;
       Viewer viewer(options);
       viewer.mailbox().publishTrajectory(trajectory, first);

@@ -179,7 +179,7 @@ class Scene {
     window_->SetWindowName(options.title.c_str());
     window_->SetSize(options.width, options.height);
 
-    map_renderer_->SetViewport(0.0, kStatusTop, kMapRight, 1.0);
+    map_renderer_->SetViewport(0.0, kStatusTop, 1.0, 1.0);
     map_renderer_->SetBackground(0.12, 0.12, 0.14);
     map_actor_ = makeActor(map_, 1, 1, 1, 2.0f, true);
     trajectory_actor_ = makeActor(trajectory_, 1.0, 0.55, 0.0, 2.0f, false);
@@ -221,6 +221,8 @@ class Scene {
 
   void apply(const ViewerUpdate& u) {
     if (u.has_images) {
+      // The map takes the whole width until there are images to show beside it.
+      map_renderer_->SetViewport(0.0, kStatusTop, kMapRight, 1.0);
       color_pane_.show(u.color);
       cv::Mat scaled;
       u.depth.convertTo(scaled, CV_8U, 255.0 / kFarDepth);
@@ -247,6 +249,7 @@ class Scene {
       setFrustum(frustum_, pose_);
     }
     if (u.has_status) {
+      live_ = true;
       status_ = u.status;
       const double t = seconds();
       if (t - fps_since_ >= 1.0) {
@@ -260,7 +263,11 @@ class Scene {
     if (u.map) {
       cloud_.assign(*u.map, options_.max_points);
       drawCloud();
-      if (!options_.follow && !map_shown_) map_renderer_->ResetCamera();
+      if (!options_.follow && !map_shown_) {
+        // Look the way the first camera looked, then back off until the whole map is in view.
+        if (has_pose_) followCamera();
+        map_renderer_->ResetCamera();
+      }
     }
     if (follow_ && has_pose_) followCamera();
     updateStatus();
@@ -307,21 +314,29 @@ class Scene {
   }
 
   void updateStatus() {
-    char line[512];
     const std::string drawn = cloud_.points.size() < cloud_.map_points
                                   ? " (" + std::to_string(cloud_.points.size()) + " drawn)"
                                   : std::string();
-    std::snprintf(line, sizeof line,
-                  "%s%s%.1f fps | frames %llu | keyframes %llu | map %llu points%s | dropped %llu "
-                  "| %s | view %s, colour %s | keys: s snapshot, q quit, f follow, c colour",
-                  options_.caption.c_str(), options_.caption.empty() ? "" : " | ", fps_,
-                  static_cast<unsigned long long>(status_.frames_processed),
-                  static_cast<unsigned long long>(status_.keyframes),
-                  static_cast<unsigned long long>(
-                      std::max<std::uint64_t>(status_.map_points, cloud_.map_points)),
-                  drawn.c_str(), static_cast<unsigned long long>(status_.frames_dropped),
-                  trackingName(status_.tracking), follow_ ? "follow" : "free",
-                  by_height_ ? "height" : "rgb");
+    const std::string view = std::string(" | view ") + (follow_ ? "follow" : "free") + ", colour " +
+                             (by_height_ ? "height" : "rgb") +
+                             " | keys: s snapshot, q quit, f follow, c colour";
+    char line[512];
+    if (live_) {
+      std::snprintf(line, sizeof line,
+                    "%s%s%.1f fps | frames %llu | keyframes %llu | map %llu points%s | "
+                    "dropped %llu | %s%s",
+                    options_.caption.c_str(), options_.caption.empty() ? "" : " | ", fps_,
+                    static_cast<unsigned long long>(status_.frames_processed),
+                    static_cast<unsigned long long>(status_.keyframes),
+                    static_cast<unsigned long long>(
+                        std::max<std::uint64_t>(status_.map_points, cloud_.map_points)),
+                    drawn.c_str(), static_cast<unsigned long long>(status_.frames_dropped),
+                    trackingName(status_.tracking), view.c_str());
+    } else {
+      std::snprintf(line, sizeof line, "%s%smap %zu points%s | keyframes %zu%s",
+                    options_.caption.c_str(), options_.caption.empty() ? "" : " | ",
+                    cloud_.map_points, drawn.c_str(), keyframe_points_.size(), view.c_str());
+    }
     status_text_->SetInput(line);
   }
 
@@ -390,6 +405,7 @@ class Scene {
   PublishedStatus status_;
   double fps_ = 0.0, fps_since_ = seconds();
   std::uint64_t fps_frames_ = 0;
+  bool live_ = false;  // a mapping run publishes its status; a saved map does not
   bool closed_ = false;
   bool dirty_ = true;
   bool map_shown_ = false;
