@@ -17,6 +17,7 @@
 # Portable bash + awk only (CI machines may not have Python).
 set -u
 export LC_ALL=C
+unset DISPLAY  # mapping alone: no viewer window (bench/viewer_overhead.sh measures that)
 
 usage() {
   cat <<'EOF'

@@ -1,5 +1,6 @@
 # Fails when a file includes a header of a subsystem its own subsystem may not depend on, so that
 # dependencies keep pointing one way:
+#   tools, runtime/main -> viewer -> runtime (the core never includes the viewer)
 #   tools, runtime/main -> runtime -> mapping -> tracking -> capture -> base
 #                          runtime -> drivers -> capture;   eval -> sim -> base;   eval -> capture
 #   launcher (the `rgbdmap` command: libc only, includes no rgbdmap header)
@@ -13,11 +14,12 @@ set(allowed_sim base sim)
 set(allowed_eval base capture sim eval)
 set(allowed_drivers base capture drivers)
 set(allowed_runtime base capture tracking mapping drivers runtime)
-set(allowed_tools base capture tracking mapping drivers runtime sim eval tools)
+set(allowed_viewer base capture tracking mapping runtime viewer)
+set(allowed_tools base capture tracking mapping drivers runtime sim eval viewer tools)
 set(allowed_launcher "")
 
 set(violations "")
-foreach(layer base capture tracking mapping sim eval drivers runtime tools launcher)
+foreach(layer base capture tracking mapping sim eval drivers runtime viewer tools launcher)
   file(GLOB_RECURSE files
     ${SOURCE_DIR}/src/${layer}/*.c
     ${SOURCE_DIR}/src/${layer}/*.cpp ${SOURCE_DIR}/src/${layer}/*.hpp

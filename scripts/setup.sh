@@ -8,6 +8,7 @@ packages=(
   libopenni2-dev libfreenect-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
   libboost-dev libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev
   libtsl-hopscotch-map-dev
+  libvtk9-dev libx11-dev libgl-dev xvfb
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -16,6 +16,7 @@
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/map_renderer.hpp"
+#include "rgbdmap/tools/run_viewer.hpp"
 
 namespace {
 
@@ -116,6 +117,7 @@ struct MapOptions {
   std::string rate;
   std::vector<std::string> sets;
   std::string stats_file;
+  std::string viewer = "auto";
   bool no_render = false;
   bool quiet = false;
   bool list_keys = false;
@@ -186,6 +188,8 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   int code = 0;
   {
     signals.mappingStarts(o.out);
+    const std::unique_ptr<Viewer> viewer = openRunViewer(o.viewer, control, o.out);
+    if (viewer) outputs.publisher = &viewer->mailbox();
     Pipeline pipeline(config, std::move(source), outputs);
     code = pipeline.run(control);
     if (!o.stats_file.empty()) {
@@ -228,6 +232,9 @@ int main(int argc, char** argv) {
                  "replay speed: 1 = as recorded, max = as fast as possible (lossless)");
   app.add_option("--set", o.sets, "override a config key: --set map.voxel_size=0.005 (repeatable)");
   app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
+  app.add_option("--viewer", o.viewer, "live window: auto (when a display is available) | none")
+      ->check(CLI::IsMember({"auto", "none"}))
+      ->capture_default_str();
   app.add_flag("--no-render", o.no_render, "do not write a picture of the map");
   app.add_flag("-q,--quiet", o.quiet, "no status line");
   app.add_flag("--list-keys", o.list_keys, "list every config key with its default and meaning");
@@ -239,6 +246,7 @@ int main(int argc, char** argv) {
   rgbdmap::addRecordCommand(app, selected);
   rgbdmap::addSynthCommand(app, selected);
   rgbdmap::addEvaluateCommand(app, selected);
+  rgbdmap::addViewCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

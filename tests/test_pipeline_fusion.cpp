@@ -84,7 +84,7 @@ TEST(PipelineFusion, BusySlotsRefuseALiveKeyframeAtOnceAndLoseNothingAccepted) {
   FusionThread fusion(mapper, 2, 640, 480, nullptr);
   // Hold the fusion thread inside a map task, as a slow keyframe would.
   std::atomic<bool> inside{false}, release{false};
-  fusion.request([&](const Mapper&) {
+  fusion.request(MapRequest::kCheckpoint, [&](const Mapper&) {
     inside.store(true);
     while (!release.load()) std::this_thread::sleep_for(1ms);
   });
@@ -114,7 +114,7 @@ TEST(PipelineFusion, MapTasksRunBetweenKeyframesOnTheFusionThread) {
   std::size_t keyframes_seen = 99;
   std::thread::id task_thread;
   for (std::size_t i = 0; i < 2; ++i) ASSERT_TRUE(fusion.submit(f.frames[i], true));
-  fusion.request([&](const Mapper& m) {
+  fusion.request(MapRequest::kCheckpoint, [&](const Mapper& m) {
     keyframes_seen = m.keyframeTrajectory().size();
     task_thread = std::this_thread::get_id();
     done.store(true);

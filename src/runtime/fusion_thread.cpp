@@ -37,10 +37,10 @@ bool FusionThread::submit(const Frame& keyframe, bool wait) {
   return true;
 }
 
-void FusionThread::request(MapTask task) {
+void FusionThread::request(MapRequest kind, MapTask task) {
   {
     std::lock_guard<std::mutex> lock(request_mutex_);
-    pending_ = std::move(task);
+    pending_[static_cast<std::size_t>(kind)] = std::move(task);
   }
   requested_.store(true);
 }
@@ -51,12 +51,13 @@ void FusionThread::finish() {
 }
 
 void FusionThread::serveRequest() {
-  MapTask task;
+  std::array<MapTask, 2> tasks;
   {
     std::lock_guard<std::mutex> lock(request_mutex_);
-    std::swap(task, pending_);
+    std::swap(tasks, pending_);
   }
-  if (task) task(mapper_);
+  for (const MapTask& task : tasks)
+    if (task) task(mapper_);
 }
 
 void FusionThread::run() {

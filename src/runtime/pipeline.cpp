@@ -160,6 +160,8 @@ int Pipeline::run(RunControl& control) {
     queue.close();
   });
 
+  // Declared before the fusion thread, which serves its map requests.
+  MapPublication publication(outputs_.publisher);
   // Keyframes go to the fusion thread; tracking never waits for fusion, except in a lossless
   // replay, where waiting keeps the set of keyframes (and so the map) independent of timing.
   const bool live = source_->isLive();
@@ -172,7 +174,7 @@ int Pipeline::run(RunControl& control) {
   // adds the map snapshot and the keyframe trajectory and hands all to the writer.
   auto checkpoint = [&] {
     auto frames = std::make_shared<const Trajectory>(tracker.trajectory());
-    fusion.request([this, &writer, frames](const Mapper& m) {
+    fusion.request(MapRequest::kCheckpoint, [this, &writer, frames](const Mapper& m) {
       writer.submit(m.snapshot(), outputs_.map_path, trajectoryFiles(outputs_, m, frames));
     });
   };
@@ -188,12 +190,18 @@ int Pipeline::run(RunControl& control) {
         const auto track_start = Clock::now();
         stats_.queue_latency.record(now() - frame->captured_at);
         try {
+          bool keyframe = false;
           if (tracker.track(*frame)) {
-            if (fusion.submit(*frame, !live))
+            keyframe = fusion.submit(*frame, !live);
+            if (keyframe)
               tracker.acceptKeyframe(*frame);
             else
               stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
           }
+          publication.afterFrame(*frame, tracker.state(), stats_, keyframe);
+          if (publication.mapDue(stats_))
+            fusion.request(MapRequest::kViewer,
+                           [&publication](const Mapper& m) { publication.publishMap(m); });
         } catch (const std::exception& e) {
           error.set(std::string(frame->origin) + ": " + e.what());
           control.stop.store(true);
@@ -252,9 +260,11 @@ int Pipeline::run(RunControl& control) {
   if (tty) std::fprintf(stderr, "\r%s\033[K\n", statusLine(stats_, stats_.wall_seconds).c_str());
 
   // Final save, through the writer so it is ordered after any checkpoint in flight.
+  const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
   writer.submit(
-      mapper.snapshot(), outputs_.map_path,
+      final_map, outputs_.map_path,
       trajectoryFiles(outputs_, mapper, std::make_shared<const Trajectory>(tracker.trajectory())));
+  publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
   if (!final_write.ok) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <functional>
@@ -19,6 +20,10 @@ namespace rgbdmap {
 // keyframes are fused one at a time in the order submitted, so a lossless replay gives the same
 // map every time. Map snapshots (checkpoints) are taken here too, between two keyframes: the
 // tracking thread only asks for one.
+// What a map request is for. Each kind has its own slot, so a viewer's request never replaces a
+// pending checkpoint.
+enum class MapRequest { kCheckpoint, kViewer };
+
 class FusionThread {
  public:
   using ErrorHandler = std::function<void(const std::string&)>;
@@ -34,8 +39,8 @@ class FusionThread {
   // proposes a later frame instead).
   bool submit(const Frame& keyframe, bool wait);
   // Runs `task` on the fusion thread with the map between two keyframes (e.g. to take a
-  // checkpoint snapshot). A request not yet served is replaced by a newer one.
-  void request(MapTask task);
+  // checkpoint snapshot). A request not yet served is replaced by a newer one of the same kind.
+  void request(MapRequest kind, MapTask task);
   // Fuses every submitted keyframe, then stops the thread. A request not served by then is
   // dropped (the caller's final save follows). After this, the Mapper is the caller's again.
   void finish();
@@ -49,7 +54,7 @@ class FusionThread {
   FrameQueue keyframes_;
   ErrorHandler on_error_;
   std::mutex request_mutex_;  // taken only when a request is made or served
-  MapTask pending_;
+  std::array<MapTask, 2> pending_;  // by MapRequest
   std::atomic<bool> requested_{false};
   std::thread thread_;
 };

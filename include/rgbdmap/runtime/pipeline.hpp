@@ -7,6 +7,7 @@
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
+#include "rgbdmap/runtime/map_publisher.hpp"
 
 namespace rgbdmap {
 
@@ -22,6 +23,7 @@ struct PipelineOutputs {
   std::string frame_trajectory_path;  // the pose of every frame, TUM format ("" = none)
   std::string config_path;            // effective configuration ("" = none)
   bool status_line = true;
+  MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
 };
 
 // The running system: a capture thread reads the source into a bounded queue, a tracking thread

@@ -15,5 +15,6 @@ void addDevicesCommand(CLI::App& app, Command& selected);    // tools/devices.cp
 void addRecordCommand(CLI::App& app, Command& selected);     // tools/record.cpp
 void addSynthCommand(CLI::App& app, Command& selected);      // tools/synth.cpp
 void addEvaluateCommand(CLI::App& app, Command& selected);   // tools/evaluate.cpp
+void addViewCommand(CLI::App& app, Command& selected);       // tools/view.cpp
 
 }  // namespace rgbdmap

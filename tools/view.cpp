@@ -1,0 +1,99 @@
+// `rgbdmap view MAP.pcd`, and the live viewer of a mapping run.
+#include <spdlog/spdlog.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/tools/commands.hpp"
+#include "rgbdmap/tools/run_viewer.hpp"
+#include "rgbdmap/viewer/display_check.hpp"
+
+namespace rgbdmap {
+namespace {
+
+bool exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+std::string stem(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  return (dot == std::string::npos || (slash != std::string::npos && dot < slash))
+             ? path
+             : path.substr(0, dot);
+}
+
+// The camera's path: the per-frame trajectory (MAP_trajectory.txt) when there is one, else the
+// keyframes (MAP_keyframes.txt); keyframes are marked.
+std::vector<TrajectoryPoint> savedTrajectory(const std::string& map_path,
+                                             Eigen::Isometry3d& first) {
+  Trajectory keyframes, frames;
+  for (auto [path, trajectory] : {std::pair{stem(map_path) + "_keyframes.txt", &keyframes},
+                                  std::pair{stem(map_path) + "_trajectory.txt", &frames}}) {
+    if (!exists(path)) continue;
+    *trajectory = Trajectory::load(path);  // InputError names the file and line
+    spdlog::info("view: {} poses from {}", trajectory->size(), path);
+  }
+  const Trajectory& path = frames.empty() ? keyframes : frames;
+  std::vector<TrajectoryPoint> points;
+  std::size_t next_keyframe = 0;  // both files are in time order
+  for (const StampedPose& p : path.poses()) {
+    while (next_keyframe < keyframes.size() &&
+           keyframes[next_keyframe].timestamp < p.timestamp - 1e-6)
+      ++next_keyframe;
+    const bool keyframe = next_keyframe < keyframes.size() &&
+                          keyframes[next_keyframe].timestamp <= p.timestamp + 1e-6;
+    points.push_back({p.pose.translation(), keyframe});
+  }
+  if (!path.empty()) first = path[0].pose;
+  return points;
+}
+
+}  // namespace
+
+std::unique_ptr<Viewer> openRunViewer(const std::string& mode, RunControl& control,
+                                      const std::string& map_path) {
+  if (mode == "none") return nullptr;
+  std::string why;
+  if (!displayAvailable(why)) {
+    spdlog::info("viewer: no display ({}): mapping without a viewer", why);
+    return nullptr;
+  }
+  ViewerOptions options;
+  options.title = "rgbdmap: " + map_path;
+  options.on_snapshot = [&control] { control.snapshot.store(true); };
+  options.on_stop = [&control] { control.stop.store(true); };
+  return std::make_unique<Viewer>(std::move(options));
+}
+
+void addViewCommand(CLI::App& app, Command& selected) {
+  auto* cmd = app.add_subcommand(
+      "view", "open a saved map with its trajectory (MAP_keyframes.txt, MAP_trajectory.txt)");
+  auto map = std::make_shared<std::string>();
+  cmd->add_option("map", *map, "map file (.pcd or .ply)")->required();
+  cmd->callback([map, &selected] {
+    selected = [map] {
+      std::string why;
+      if (!displayAvailable(why))
+        throw InputError("rgbdmap view: no display to open a window on (" + why +
+                         "); `rgbdmap render` draws a map to a PNG without one");
+      auto cloud = std::make_shared<MapCloud>(loadMapFile(*map));
+      Eigen::Isometry3d first = Eigen::Isometry3d::Identity();
+      const std::vector<TrajectoryPoint> trajectory = savedTrajectory(*map, first);
+      ViewerOptions options;
+      options.title = "rgbdmap: " + *map;
+      options.caption = std::filesystem::path(*map).filename().string();
+      options.follow = false;
+      Viewer viewer(options);
+      viewer.mailbox().publishTrajectory(trajectory, first);
+      viewer.mailbox().publishMap(cloud);
+      viewer.waitUntilClosed();
+      return 0;
+    };
+  });
+}
+
+}  // namespace rgbdmap
