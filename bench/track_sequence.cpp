@@ -1,8 +1,9 @@
 // Tracks every frame of a TUM folder with one or more trackers, in the same run, and reports
-// for each: ATE RMSE and RPE (TUM's definitions, src/eval) over every frame (a lost frame counts
-// with the pose the tracker predicted), frames lost and relocalised, and milliseconds per frame
-// spent in tracking alone (PNG decoding excluded), median and p95. The first method is the
-// baseline of the ratio columns. Writes each per-frame trajectory as TUM text when asked.
+// for each (OpenCV's frame to frame): ATE RMSE and RPE (TUM's definitions, src/eval) over every
+// frame (a lost frame counts with the pose the tracker predicted), frames lost and relocalised, and
+// milliseconds per frame spent in tracking alone (PNG decoding excluded), median and p95. The first
+// method is the baseline of the ratio columns. Writes each per-frame trajectory as TUM text when
+// asked.
 //
 //   track_sequence --sequence DIR [--methods dense,opencv_rgbd,opencv_rgbd_icp]
 //                  [--trajectory-prefix PATH] [--set key=value]... [--json FILE]
@@ -22,6 +23,7 @@
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
+#include "rgbdmap/tracking/rgbd_odometry.hpp"
 
 namespace {
 
@@ -42,7 +44,20 @@ double percentile(std::vector<double> v, double q) {
 Outcome track(rgbdmap::TumSequence& sequence, rgbdmap::Config config, const std::string& method) {
   config.pose_source = "odometry";
   config.tracking.method = method;
-  std::unique_ptr<rgbdmap::PoseProvider> tracker = rgbdmap::makePoseProvider(config);
+  std::unique_ptr<rgbdmap::PoseProvider> tracker;
+  if (method == "dense") {
+    tracker = rgbdmap::makePoseProvider(config);
+  } else {
+    // OpenCV's odometries frame to frame, as the peers were measured: every frame becomes the
+    // reference of the next.
+    rgbdmap::RgbdOdometryPoses::Options options;
+    options.min_depth = config.min_depth;
+    options.max_depth = config.max_depth;
+    options.new_reference_translation = 0;
+    options.new_reference_rotation = 0;
+    options.icp = method == "opencv_rgbd_icp";
+    tracker = std::make_unique<rgbdmap::RgbdOdometryPoses>(config.camera, options);
+  }
   Outcome out;
   out.method = method;
   rgbdmap::Frame frame;
