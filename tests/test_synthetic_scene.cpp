@@ -312,6 +312,43 @@ TEST_F(SyntheticSequenceTest, SameSeedSameImagesOtherSeedOtherNoise) {
             0.0);
 }
 
+TEST_F(SyntheticSequenceTest, NoiseSeedChangesTheNoiseNotThePath) {
+  // A second pass over the same path with fresh sensor noise (issue 11's revisit test).
+  const std::string root = test::freshDir();
+  SyntheticSequenceOptions options;
+  options.frames = 2;
+  options.seed = kSeed;
+  options.noise_seed = options.noise_seed + 1;
+  writeSyntheticSequence(root + "/fresh", SyntheticScene::defaultRoom(), options);
+  const TumSequence first(noisy_), fresh(root + "/fresh");
+  ASSERT_TRUE(first[1].pose.has_value() && fresh[1].pose.has_value());
+  EXPECT_TRUE(first[1].pose->isApprox(*fresh[1].pose, 1e-9));
+  const cv::Mat a = cv::imread(first[1].depth_path, cv::IMREAD_UNCHANGED);
+  const cv::Mat b = cv::imread(fresh[1].depth_path, cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(b.empty());
+  EXPECT_GT(cv::norm(a, b, cv::NORM_INF), 0.0);
+}
+
+TEST(SyntheticScene, ALargerRoomKeepsItsFurnitureInside) {
+  const SyntheticScene scene = SyntheticScene::defaultRoom(Eigen::Vector3d(6.0, 5.0, 3.0));
+  const ScenePrimitive& room = scene.room();
+  EXPECT_EQ(room.max - room.min, Eigen::Vector3d(6.0, 5.0, 3.0));
+  for (const ScenePrimitive& p : scene.primitives()) {
+    if (p.kind == ScenePrimitive::Kind::kBox) {
+      EXPECT_TRUE((p.min.array() >= room.min.array()).all() &&
+                  (p.max.array() <= room.max.array()).all())
+          << p.name;
+    } else if (p.kind == ScenePrimitive::Kind::kSphere) {
+      EXPECT_TRUE((p.center.array() - p.radius >= room.min.array()).all() &&
+                  (p.center.array() + p.radius <= room.max.array()).all())
+          << p.name;
+    }
+  }
+  const HandheldPath path(room, 3, 12.0);
+  for (double t = 0.0; t < 12.0; t += 0.05)
+    EXPECT_TRUE(scene.isFreeSpace(path.pose(t).translation(), 0.25)) << "t = " << t;
+}
+
 TEST_F(SyntheticSequenceTest, VisibleSurfaceSamplesLieExactlyOnTheScene) {
   pcl::PointCloud<pcl::PointXYZ> surface;
   ASSERT_EQ(pcl::io::loadPCDFile(noisy_ + "/visible_surface.pcd", surface), 0);

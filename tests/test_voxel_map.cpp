@@ -114,7 +114,9 @@ TEST(VoxelMap, NoisyViewsOfAFarPlaneConvergeInsteadOfThickening) {
   const double mean = sum / static_cast<double>(cloud.size());
   std::cout << cloud.size() << " points (" << after_first << " after one view), mean |dz| "
             << mean * 1000 << " mm\n";
-  EXPECT_LT(mean, 0.004);
+  // One view is off by 0.8 sigma (16 mm) on average; 12 averaged views, by about sigma / sqrt(12)
+  // along the line of sight (measured 4.7 mm).
+  EXPECT_LT(mean, sigma / 3.0);
 }
 
 TEST(VoxelMap, PointCountIsWhatExtractWritesAcrossBlockBorders) {
