@@ -35,9 +35,10 @@ fi
 targets="tum_lists trajectory config map_file"
 [ -n "$only" ] && targets="$only"
 
+mkdir -p "$build_dir"
 CC=clang-14 CXX=clang++-14 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DRGBDMAP_SANITIZE=fuzzer -DRGBDMAP_BUILD_TESTS=OFF -DRGBDMAP_BUILD_BENCH=OFF >"$build_dir.cmake.log" 2>&1 \
-  || { cat "$build_dir.cmake.log"; exit 2; }
+  -DRGBDMAP_SANITIZE=fuzzer -DRGBDMAP_BUILD_TESTS=OFF -DRGBDMAP_BUILD_BENCH=OFF >"$build_dir/cmake.log" 2>&1 \
+  || { cat "$build_dir/cmake.log"; exit 2; }
 cmake --build "$build_dir" -j2 --target $(for t in $targets; do printf 'fuzz_%s ' "$t"; done) || exit 2
 
 # Seeds: the real files of the shared data and the presets.
