@@ -69,7 +69,8 @@ for t in $targets; do
   corpus="$build_dir/corpus/$t"
   mkdir -p "$corpus"
   echo "== fuzz_$t: $seconds s"
-  if ! "$build_dir/fuzz/fuzz_$t" "$corpus" "$seeds/$t" $(ls -d "$build_dir"/crashes/"$t"-* 2>/dev/null) -max_total_time="$seconds" -timeout=10 \
+  cp "$build_dir"/crashes/"$t"-* "$corpus"/ 2>/dev/null  # earlier findings must stay fixed
+  if ! "$build_dir/fuzz/fuzz_$t" "$corpus" "$seeds/$t" -max_total_time="$seconds" -timeout=10 \
       -rss_limit_mb=2048 -max_len=16384 -print_final_stats=1 \
       -artifact_prefix="$build_dir/crashes/${t}-" >"$build_dir/fuzz_$t.log" 2>&1; then
     failed=1
