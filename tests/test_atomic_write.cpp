@@ -39,7 +39,15 @@ TEST(AtomicWrite, KilledWriterNeverLeavesPartialFile) {
       for (;;)
         if (!writePcdAtomically(cloud, path, error)) ::_exit(3);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng) * (round + 1) / 2));
+    if (round == 0) {
+      // Once a complete map is in place (a busy machine may take seconds to write one), every
+      // later kill must leave it or a newer complete one.
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+      while (!fs::exists(path) && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng) * (round + 1) / 2));
+    }
     ::kill(child, round % 2 ? SIGKILL : SIGTERM);
     int status = 0;
     ::waitpid(child, &status, 0);
@@ -52,7 +60,7 @@ TEST(AtomicWrite, KilledWriterNeverLeavesPartialFile) {
     for (const auto& entry : fs::directory_iterator(dir))
       if (entry.path() != path) fs::remove(entry.path());  // the killed writer's temp file
   }
-  EXPECT_GT(complete_seen, 0);
+  EXPECT_EQ(complete_seen, 12);
 }
 
 TEST(AtomicWrite, DiskFullKeepsThePreviousMap) {

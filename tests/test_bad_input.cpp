@@ -281,7 +281,13 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
         "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA";
     out << header << '\0' << "ascii\n0 0 1 4.2e6\n1 2 3 0\n";
   }
-  for (const std::string& path : {garbage, truncated, nul_in_header}) {
+  // Found by fuzz/fuzz_map_file: 1-byte y, z, rgb fields made PCL's conversion read past the
+  // data (ASan: heap-buffer-overflow).
+  const std::string narrow_fields = dir + "/narrow_fields.pcd";
+  std::ofstream(narrow_fields, std::ios::binary)
+      << "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 "
+         "0 0 0\nPOINTS 2\nDATA ascii\n0 1 2 3\n1 2 3 0\n";
+  for (const std::string& path : {garbage, truncated, nul_in_header, narrow_fields}) {
     std::string output;
     const int code =
         test::run(test::binary() + " render " + path + " --out " + dir + "/x.png", &output);

@@ -73,6 +73,21 @@ pcl::PCLPointCloud2 loadCloudBlob(const std::string& path, const char* what) {
   }
   if (!(x && y && z) && blob.width * blob.height > 0)
     throw InputError(path + ": the " + std::string(what) + " has no x, y, z fields");
+  // PCL's conversion to a typed cloud copies each field with the size of the point type's field
+  // (4 bytes for x, y, z, rgb): a header that declares other sizes, fields beyond the point, or
+  // less data than it promises would make it read out of bounds (found by fuzz_map_file).
+  for (const pcl::PCLPointField& field : blob.fields) {
+    const std::size_t bytes =
+        pcl::getFieldSize(field.datatype) * std::max<std::size_t>(field.count, 1);
+    const bool copied = field.name == "x" || field.name == "y" || field.name == "z" ||
+                        field.name == "rgb" || field.name == "rgba";
+    if ((copied && pcl::getFieldSize(field.datatype) != 4) ||
+        field.offset + bytes > blob.point_step)
+      throw InputError(path + ": field " + field.name + " of the " + std::string(what) +
+                       " has a size or offset that does not fit its points");
+  }
+  if (blob.data.size() < std::size_t(blob.point_step) * blob.width * blob.height)
+    throw InputError(path + ": the " + std::string(what) + " holds less data than its header says");
   return blob;
 }
 
