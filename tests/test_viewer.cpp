@@ -188,11 +188,9 @@ class ViewerWindow : public ::testing::Test {
     return window;
   }
 
-  // Most of what is drawn in the map's part of the window has the colours of the saved map
-  // (quantised to 16 levels per channel): not a blank window, not a wrong colouring.
-  static void expectMapColours(const cv::Mat& shot, const MapCloud& map) {
-    ASSERT_FALSE(shot.empty());
-    ASSERT_GT(map.size(), 1000u);
+  // Of the pixels drawn in the map's part of the window (not its background), the share in the
+  // colours of the saved map (quantised to 16 levels per channel).
+  static std::pair<double, double> drawnAndInMapColours(const cv::Mat& shot, const MapCloud& map) {
     std::set<int> map_bins;
     for (const auto& p : map) map_bins.insert((p.r >> 4) << 8 | (p.g >> 4) << 4 | (p.b >> 4));
     const cv::Rect map_area(0, 0, shot.cols * 72 / 100, shot.rows * 95 / 100);
@@ -205,11 +203,18 @@ class ViewerWindow : public ::testing::Test {
         ++drawn;
         in_map += map_bins.count((c[2] >> 4) << 8 | (c[1] >> 4) << 4 | (c[0] >> 4));
       }
-    const double area = static_cast<double>(map_area.area());
-    EXPECT_GT(static_cast<double>(drawn) / area, 0.05) << "the map pane is (nearly) blank";
-    EXPECT_GT(static_cast<double>(in_map) / static_cast<double>(std::max<std::size_t>(drawn, 1)),
-              0.6)
-        << drawn << " pixels drawn, " << in_map << " in the map's colours";
+    return {static_cast<double>(drawn) / static_cast<double>(map_area.area()),
+            static_cast<double>(in_map) / static_cast<double>(std::max<std::size_t>(drawn, 1))};
+  }
+
+  // Most of what is drawn in the map's part of the window has the colours of the saved map: not
+  // a blank window, not a wrong colouring.
+  static void expectMapColours(const cv::Mat& shot, const MapCloud& map) {
+    ASSERT_FALSE(shot.empty());
+    ASSERT_GT(map.size(), 1000u);
+    const auto [drawn, in_map] = drawnAndInMapColours(shot, map);
+    EXPECT_GT(drawn, 0.05) << "the map pane is (nearly) blank";
+    EXPECT_GT(in_map, 0.6) << "of what is drawn, only " << in_map << " has the map's colours";
   }
 
   std::vector<std::string> replay(const std::string& dir) {
@@ -268,6 +273,15 @@ TEST_F(ViewerWindow, ViewOpensASavedMapWithItsTrajectory) {
   cv::imwrite(dir + "/screenshot.png", shot);  // to look at when the test fails
   expectMapColours(shot, test::loadMap(dir + "/map.pcd"));
   EXPECT_TRUE(logHas(log, "poses from " + dir + "/map_keyframes.txt")) << test::readFile(log);
+  // c: the same points in a blue-to-red height ramp, no longer the map's own colours.
+  server_->pressKey(window, 'c');
+  ASSERT_TRUE(waitFor([&] { return logHas(log, "on screen: colour by height"); }, 60s))
+      << test::readFile(log);
+  const cv::Mat by_height = server_->screenshot(window);
+  cv::imwrite(dir + "/screenshot_height.png", by_height);
+  const auto [drawn, in_map] = drawnAndInMapColours(by_height, test::loadMap(dir + "/map.pcd"));
+  EXPECT_GT(drawn, 0.01);
+  EXPECT_LT(in_map, 0.5) << "coloured by height, " << in_map << " still has the map's colours";
   server_->closeWindow(window);
   EXPECT_EQ(p.wait(60), 0) << test::readFile(log);
 }

@@ -279,6 +279,10 @@ class Scene {
     dirty_ = false;
     map_renderer_->ResetCameraClippingRange();
     window_->Render();
+    if (!announce_.empty()) {
+      spdlog::info("viewer: on screen: {}", announce_);  // after drawing: tests wait for it
+      announce_.clear();
+    }
     if (!map_shown_ && !cloud_.points.empty()) {
       map_shown_ = true;
       spdlog::info("viewer: map on screen ({} of {} points drawn)", cloud_.points.size(),
@@ -354,10 +358,12 @@ class Scene {
       case 'f':
         self->follow_ = !self->follow_;
         if (self->follow_ && self->has_pose_) self->followCamera();
+        self->announce_ = self->follow_ ? "view follows the camera" : "view free";
         break;
       case 'c':
         self->by_height_ = !self->by_height_;
         self->drawCloud();
+        self->announce_ = self->by_height_ ? "colour by height" : "colour rgb";
         break;
       default:
         return;  // the interactor style's keys (r resets the view, ...)
@@ -405,7 +411,8 @@ class Scene {
   PublishedStatus status_;
   double fps_ = 0.0, fps_since_ = seconds();
   std::uint64_t fps_frames_ = 0;
-  bool live_ = false;  // a mapping run publishes its status; a saved map does not
+  std::string announce_;  // logged once the window shows it
+  bool live_ = false;     // a mapping run publishes its status; a saved map does not
   bool closed_ = false;
   bool dirty_ = true;
   bool map_shown_ = false;
