@@ -4,6 +4,7 @@
 // device that unplugs and comes back.
 
 #include <gtest/gtest.h>
+#include <pcl/kdtree/kdtree_flann.h>
 #include <signal.h>
 
 #include <algorithm>
@@ -126,7 +127,7 @@ TEST(OpenNI2Cli, MapsTheKinectRecordingEndToEnd) {
   EXPECT_GT(map.size(), 50000u);
   EXPECT_EQ(static_cast<double>(map.size()), statValue(stats, "map_points"));
   std::printf("map of the recording: %zu points\n", map.size());
-  EXPECT_NE(output.find("RGB-D odometry"), std::string::npos) << output;
+  EXPECT_NE(output.find("poses: dense RGB-D tracking"), std::string::npos) << output;
 }
 
 TEST(OpenNI2Cli, NoCameraGivesAClearErrorNotACrash) {
@@ -404,26 +405,24 @@ TEST(OpenNI2Cli, ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly) {
   // instead of TUM's 0.2 mm).
   const MapCloud a = test::loadMap(dir + "/device.pcd");
   const MapCloud b = test::loadMap(dir + "/direct.pcd");
-  ASSERT_GT(a.size(), 50000u);
+  // 32 frames of fr1/xyz: about 34k surface voxels (the TSDF keeps one point per surface voxel).
+  ASSERT_GT(a.size(), 20000u);
   EXPECT_NEAR(static_cast<double>(a.size()), static_cast<double>(b.size()), 1e-4 * b.size());
-  // One point per 1 cm voxel: pair the points by voxel.
-  auto voxel = [](const pcl::PointXYZRGB& p) {
-    return std::array<long, 3>{std::lround(std::floor(p.x / 0.01f)),
-                               std::lround(std::floor(p.y / 0.01f)),
-                               std::lround(std::floor(p.z / 0.01f))};
-  };
-  std::map<std::array<long, 3>, pcl::PointXYZRGB> by_voxel;
-  for (const auto& p : a.points) by_voxel.emplace(voxel(p), p);
+  // Each surface point of one map has its twin in the other: the surfaces sit where the TSDF
+  // crosses zero, which the depth units (0.1 mm from the device, 0.2 mm in TUM's PNGs) move by a
+  // fraction of a millimetre.
+  pcl::KdTreeFLANN<pcl::PointXYZRGB> tree;
+  tree.setInputCloud(a.makeShared());
+  std::vector<int> index(1);
+  std::vector<float> squared(1);
   std::size_t same = 0;
   for (const auto& q : b.points) {
-    const auto found = by_voxel.find(voxel(q));
-    if (found == by_voxel.end()) continue;
-    const pcl::PointXYZRGB& p = found->second;
-    same += (p.getVector3fMap() - q.getVector3fMap()).cwiseAbs().maxCoeff() < 1e-4f &&
-            std::abs(int(p.r) - int(q.r)) <= 1 && std::abs(int(p.g) - int(q.g)) <= 1 &&
-            std::abs(int(p.b) - int(q.b)) <= 1;
+    if (tree.nearestKSearch(q, 1, index, squared) != 1) continue;
+    const pcl::PointXYZRGB& p = a.points[static_cast<std::size_t>(index[0])];
+    same += squared[0] < 1e-3f * 1e-3f && std::abs(int(p.r) - int(q.r)) <= 2 &&
+            std::abs(int(p.g) - int(q.g)) <= 2 && std::abs(int(p.b) - int(q.b)) <= 2;
   }
-  EXPECT_GE(same, static_cast<std::size_t>(0.999 * static_cast<double>(b.size())))
+  EXPECT_GE(same, static_cast<std::size_t>(0.995 * static_cast<double>(b.size())))
       << same << " of " << b.size() << " points agree";
 }
 

@@ -74,7 +74,7 @@ TEST(PipelineFusion, FusedOnItsThreadGivesTheSameMapAsFusedInTurn) {
   EXPECT_EQ(threaded_stats.keyframes.load(), 6u);
   EXPECT_EQ(threaded.keyframeTrajectory().size(), 6u);
   expectSameCloud(*sequential.snapshot(), *threaded.snapshot());
-  EXPECT_GT(threaded.snapshot()->size(), 30000u);
+  EXPECT_GT(threaded.snapshot()->size(), 20000u);  // six fr1 frames: ~30k surface voxels
 }
 
 TEST(PipelineFusion, BusySlotsRefuseALiveKeyframeAtOnceAndLoseNothingAccepted) {

@@ -53,7 +53,7 @@ class FusionThread {
   Mapper& mapper_;
   FrameQueue keyframes_;
   ErrorHandler on_error_;
-  std::mutex request_mutex_;  // taken only when a request is made or served
+  std::mutex request_mutex_;        // taken only when a request is made or served
   std::array<MapTask, 2> pending_;  // by MapRequest
   std::atomic<bool> requested_{false};
   std::thread thread_;
