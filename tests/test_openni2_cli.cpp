@@ -286,7 +286,11 @@ TEST(OpenNI2Cli, RecordsATumDeviceAcrossAnUnplugBitIdentically) {
   const TumSequence original(test::tumDir(kXyz));
   const TumSequence copy(dir);
   expectCompleteRecording(dir, copy.size());
-  EXPECT_GT(copy.size(), 10u) << "nothing recorded after the unplug: " << output;
+  // A loaded machine may lose some frames of a live device, but frames from after the unplug
+  // (the folder's 11th pair on) must be there.
+  ASSERT_GT(copy.size(), 0u) << output;
+  EXPECT_GT(copy[copy.size() - 1].rgb_time, original[9].rgb_time + 1e-3)
+      << "nothing recorded after the unplug: " << output;
   EXPECT_LE(copy.size(), 20u);
   std::size_t j = 0;
   for (std::size_t i = 0; i < copy.size(); ++i) {
