@@ -228,6 +228,11 @@ double fScore(const std::string& map_path, const std::string& scene,
 }
 
 TEST(PipelineTracking, OdometryMapOfASyntheticRoomIsCloseToTheExactPoseMap) {
+#ifdef __SANITIZE_THREAD__
+  GTEST_SKIP()
+      << "synth renders on OpenCV's TBB threads, whose synchronisation ThreadSanitizer cannot see; "
+         "the other pipeline tests cover the threads, release and ASan run this one";
+#endif
   const std::string dir = test::freshDir();
   std::string output;
   ASSERT_EQ(test::run(test::binary() + " synth --out " + dir + "/room --frames 60", &output), 0)
