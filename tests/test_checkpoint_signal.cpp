@@ -86,7 +86,9 @@ TEST(CheckpointSignal, Sigusr1WritesCompleteMapWhileMapping) {
   EXPECT_TRUE(still_running) << "the checkpoint should come while mapping goes on";
   EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
   const MapCloud final_map = test::loadMap(dir + "/map.pcd");
-  EXPECT_GE(final_map.size(), checkpoint.size());
+  // The final map keeps what the checkpoint had, but for the few noisy points later views of the
+  // TSDF carve away.
+  EXPECT_GE(static_cast<double>(final_map.size()), 0.99 * static_cast<double>(checkpoint.size()));
   const std::string log = test::readFile(dir + "/log.txt");
   EXPECT_NE(log.find("SIGUSR1: writing a checkpoint"), std::string::npos);
   // Every write is logged as a checkpoint: the SIGUSR1 ones and the final save.

