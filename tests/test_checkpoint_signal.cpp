@@ -39,12 +39,7 @@ std::vector<std::string> replayArgs(const std::string& dir, const std::string& r
 }
 
 bool waitFor(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(10ms);
-  }
-  return true;
+  return test::waitUntil(condition, std::chrono::duration<double>(timeout).count());
 }
 
 // Points of each "checkpoint: N points written" line of a log, in order.

@@ -46,16 +46,7 @@ double statValue(const std::string& json, const std::string& name) {
   return std::stod(json.substr(at + name.size() + 3));
 }
 
-// Waits (up to `timeout_s`) for `condition`, checking every 50 ms: tests wait for what they need
-// to see, never for a fixed time.
-bool waitUntil(const std::function<bool()>& condition, double timeout_s = 120) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return true;
-}
+using test::waitUntil;
 
 // Lines of a TUM list that name a frame (not comments).
 std::size_t listedFrames(const std::string& path) {

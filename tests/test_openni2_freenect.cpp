@@ -37,12 +37,7 @@ std::size_t occurrences(const std::string& text, const std::string& what) {
 }
 
 bool waitForLog(const std::string& path, const std::string& text, double timeout_s) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (occurrences(test::readFile(path), text) > 0) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return false;
+  return test::waitUntil([&] { return occurrences(test::readFile(path), text) > 0; }, timeout_s);
 }
 
 // rgbdmap with libfreenect replaced by fakenect playing `dump`.

@@ -54,12 +54,7 @@ std::size_t dataLines(const std::string& path) {
 }
 
 bool waitFor(const std::function<bool()>& condition, std::chrono::seconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(10ms);
-  }
-  return true;
+  return test::waitUntil(condition, std::chrono::duration<double>(timeout).count());
 }
 
 TEST(PipelineTracking, EveryFrameIsTrackedCountedAndWrittenToTheTrajectory) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,9 @@ class Process {
 };
 
 std::string readFile(const std::string& path);
+// Polls `condition` until it holds (true) or `timeout_s` has passed (false): tests wait for
+// what they need to see, never for a fixed time.
+bool waitUntil(const std::function<bool()>& condition, double timeout_s = 120.0);
 // A number from flat JSON ("key": value, as --stats and `evaluate --json` write); a test failure
 // and NaN when the key is missing.
 double jsonNumber(const std::string& json, const std::string& key);

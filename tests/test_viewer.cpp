@@ -156,12 +156,7 @@ TEST(ViewerMailbox, AViewerTakingConcurrentlyGetsEveryPoseInOrderAndTheLastMap) 
 // --- The window, under Xvfb -------------------------------------------------------------------
 
 bool waitFor(const std::function<bool()>& condition, std::chrono::seconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(20ms);
-  }
-  return true;
+  return test::waitUntil(condition, std::chrono::duration<double>(timeout).count());
 }
 
 bool logHas(const std::string& path, const std::string& text) {
