@@ -20,6 +20,10 @@ using Clock = std::chrono::steady_clock;
 // camera's first frame, so a second stream started right after the first still gets it.
 constexpr std::chrono::microseconds kFirstFrameDelay(1000000 / kTumFps);
 
+// In manual mode, how long a poke that came during a delivery waits for the host to poke again
+// before it is taken as the request for the next pair (see play()).
+constexpr std::chrono::seconds kUnansweredPokeWait(1);
+
 OniVersion driverVersion() {
   OniVersion version;
   version.major = TUM_DEVICE_VERSION_MAJOR;
@@ -214,6 +218,8 @@ void TumDevice::play() {
   double run_first_pace = 0.0;
   bool timed = false;
   bool first_of_run = true;
+  bool poked_while_delivering = false;
+  std::chrono::steady_clock::duration wait_for_poke = std::chrono::hours(24);
   std::unique_lock<std::mutex> lock(state_mutex_);
   while (true) {
     state_changed_.wait(lock, [this] { return closing_ || running_streams_ > 0; });
@@ -255,23 +261,28 @@ void TumDevice::play() {
       state_changed_.wait_for(lock, std::chrono::seconds(1), [this, run] {
         return closing_ || runs_ != run || running_streams_ >= created_streams_;
       });
-    if (manual && !first_of_run &&
-        !state_changed_.wait_for(lock, std::chrono::hours(24), [this, run] {
-          return closing_ || runs_ != run || running_streams_ == 0 || reads_ >= reads_due_;
-        }))
+    // A poke that came while the last pair was delivered was most likely the host finding the
+    // pair half there; it asks again once it has read it. If it does not within
+    // kUnansweredPokeWait, the poke was a real request that raced the end of the delivery.
+    const auto asked = [this, run] {
+      return closing_ || runs_ != run || running_streams_ == 0 || reads_ >= reads_due_;
+    };
+    if (manual && !first_of_run && !state_changed_.wait_for(lock, wait_for_poke, asked) &&
+        !poked_while_delivering)
       continue;
     if (closing_) return;
     if (runs_ != run || running_streams_ == 0) continue;
     first_of_run = false;
     // In manual mode the next pair waits until the host asks for more (it waits for a frame
     // and none is left); a pair that could not be decoded is not waited for.
-    const std::uint64_t reads_before = reads_;
-    bool delivered = false;
     lock.unlock();
     std::string error;
-    if (camera_->take(*shot, frame, error)) {
+    const bool delivered = camera_->take(*shot, frame, error);
+    lock.lock();
+    const std::uint64_t reads_before = reads_;  // pokes from here on came during the delivery
+    lock.unlock();
+    if (delivered) {
       deliver(frame, *shot);
-      delivered = true;
       if (camera_->countDelivered(generation_)) {
         log_.info(std::string(camera_->info().uri) + ": unplugged after " +
                   std::to_string(camera_->uri().disconnect_after) + " frames");
@@ -281,7 +292,13 @@ void TumDevice::play() {
       log_.warning("skipping frame " + std::to_string(shot->frame_index) + ": " + error);
     }
     lock.lock();
-    reads_due_ = delivered ? reads_before + 1 : reads_;
+    // Pokes that came while the pair was being handed out do not count as asking for the next:
+    // the host pokes whenever it finds nothing, including when it saw the depth of this pair
+    // but not yet its colour. Counting those ran the player a pair ahead of a slow host, whose
+    // unread frames the next pair then replaced.
+    reads_due_ = delivered ? reads_ + 1 : reads_;
+    poked_while_delivering = delivered && reads_ != reads_before;
+    wait_for_poke = poked_while_delivering ? kUnansweredPokeWait : std::chrono::hours(24);
   }
 }
 

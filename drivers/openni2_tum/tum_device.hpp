@@ -77,6 +77,7 @@ class TumDevice : public oni::driver::DeviceBase, private StreamHost {
   float speed_ = 1.0f;           // playback speed: a ratio of the recorded timing, <= 0 manual
   std::uint64_t reads_ = 0;      // the host asked for more (tryManualTrigger calls)
   std::uint64_t reads_due_ = 0;  // in manual mode, the next pair waits for reads_ to get here
+                                 // (a poke after the last pair was handed out)
   std::thread player_;
 };
 
