@@ -151,18 +151,14 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
 }
 
 void VoxelMap::finishIntegration() {
-  // A voxel's status depends on its face neighbours, so blocks next to an updated one are
-  // recounted too.
-  std::vector<std::uint32_t> recount;
-  recount.reserve(touched_.size() * 2);
-  auto add = [&](std::uint32_t i) {
+  auto due = [&](std::uint32_t i) {
     Block& b = blocks_[i];
-    if (b.recounted_in == integration_) return;
-    b.recounted_in = integration_;
-    recount.push_back(i);
+    if (b.count_due) return;
+    b.count_due = true;
+    count_due_.push_back(i);
   };
   for (const std::uint32_t i : touched_) {
-    add(i);
+    due(i);
     const Eigen::Vector3i c = blocks_[i].origin / kBlockEdge;
     for (int axis = 0; axis < 3; ++axis) {
       for (const int step : {-1, 1}) {
@@ -171,26 +167,32 @@ void VoxelMap::finishIntegration() {
         std::uint64_t key;
         if (!packKey(at, key)) continue;
         const auto it = block_index_.find(key);
-        if (it != block_index_.end()) add(it->second);
+        if (it != block_index_.end()) due(it->second);
       }
     }
   }
   touched_.clear();
-  for (const std::uint32_t i : recount) {
+}
+
+std::size_t VoxelMap::pointCount() {
+  for (const std::uint32_t i : count_due_) {
     Block& b = blocks_[i];
     std::uint32_t count = 0;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
     points_ += count;
     points_ -= b.surface_points;
     b.surface_points = count;
+    b.count_due = false;
   }
+  count_due_.clear();
+  return points_;
 }
 
 void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   cloud.clear();
   cloud.reserve(points_);
   for (const Block& b : blocks_) {
-    if (b.surface_points == 0) continue;
+    if (b.surface_points == 0 && !b.count_due) continue;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
       pcl::PointXYZRGB point;
       point.x = p.x();

@@ -48,9 +48,9 @@ class VoxelMap {
   struct Block {
     Eigen::Vector3i origin;                  // voxel coordinates of the block's first voxel
     std::array<Voxel, kBlockVoxels> voxels;  // x fastest, then y, then z
-    std::uint32_t surface_points = 0;        // what extract() writes from this block
+    std::uint32_t surface_points = 0;        // what extract() wrote from it when last counted
     std::uint64_t touched_in = 0;            // the last integration that updated it
-    std::uint64_t recounted_in = 0;          // the last integration that recounted it
+    bool count_due = false;                  // it or a neighbour changed since it was counted
   };
 
   // Voxels seen in fewer than min_observations frames are kept (more may come) but not
@@ -61,8 +61,9 @@ class VoxelMap {
   std::uint32_t minObservations() const { return min_observations_; }
   std::size_t blockCount() const { return blocks_.size(); }
   std::size_t memoryBytes() const;
-  // Points extract() writes, kept up to date by finishIntegration().
-  std::size_t pointCount() const { return points_; }
+  // Points extract() writes. Counting is left until asked for: after each integration it would
+  // revisit the blocks updated and their neighbours, about a tenth of the fusion time.
+  std::size_t pointCount();
 
   // One coloured point per surface voxel, in a deterministic order (blocks in the order they
   // were created).
@@ -78,8 +79,8 @@ class VoxelMap {
   const std::vector<std::uint32_t>& touchedBlocks() const { return touched_; }
   Block& block(std::uint32_t index) { return blocks_[index]; }
   const Block& block(std::uint32_t index) const { return blocks_[index]; }
-  // Recounts the surface points of the working set and of the blocks next to it (whose border
-  // voxels may have changed status), then clears the working set.
+  // Marks the working set and the blocks next to it (whose border voxels may have changed
+  // status) for counting, then clears the working set.
   void finishIntegration();
 
   // Voxel coordinates <-> key of the voxel that contains p. Exposed for tests; keyFor returns
@@ -103,6 +104,7 @@ class VoxelMap {
   tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // -> blocks_
   std::deque<Block> blocks_;  // a deque: growing never copies the blocks there are
   std::vector<std::uint32_t> touched_;
+  std::vector<std::uint32_t> count_due_;  // blocks with count_due set
 };
 
 }  // namespace rgbdmap
