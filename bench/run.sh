@@ -47,6 +47,7 @@ every_n=10
 run_micro=0
 keep=0
 run_tracking=1
+invocation="$*"  # for the results file
 while [ $# -gt 0 ]; do
   case "$1" in
     --frames) frames_limit="$2"; shift 2 ;;
@@ -513,8 +514,11 @@ if [ -n "$out_file" ]; then
     echo
     echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
     echo "- host: $(uname -n), $(getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?') cores, $(uname -sr)"
-    echo "- commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet HEAD -- . ":(exclude)${out_file#"$root"/}" 2>/dev/null || echo ' (with uncommitted changes)')"
-    echo "- command: bash bench/run.sh ${frames_limit:+--frames $frames_limit }--build ${build_dir#"$root"/}$([ "$run_micro" = 1 ] && echo " --micro")"
+    # The results file itself does not count as a change (when it is inside the checkout).
+    local_changes=(git -C "$root" diff --quiet HEAD --)
+    case "$out_file" in "$root"/*) local_changes+=(. ":(exclude)${out_file#"$root"/}") ;; esac
+    echo "- commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$("${local_changes[@]}" 2>/dev/null || echo ' (with uncommitted changes)')"
+    echo "- command: bash bench/run.sh $invocation"
     echo
     echo '```'
     cat "$table"
