@@ -61,8 +61,6 @@ struct DirectFrames {
   std::vector<std::uint64_t> color_stamps;
 };
 
-// Like rgbdmap's source, it leaves the recording open and OpenNI2 running until the process ends:
-// Debian's OniFile driver sometimes crashes when a recording is closed.
 #ifdef __SANITIZE_THREAD__
 extern "C" void AnnotateIgnoreReadsBegin(const char* file, int line);
 extern "C" void AnnotateIgnoreReadsEnd(const char* file, int line);
@@ -85,6 +83,8 @@ cv::Mat copyOfFrame(const openni::VideoFrameRef& ref, int type) {
   return copy;
 }
 
+// Like rgbdmap's source, it leaves the recording open and OpenNI2 running until the process ends:
+// Debian's OniFile driver sometimes crashes when a recording is closed.
 struct DirectDevice {
   openni::Device device;
   openni::VideoStream depth, color;
