@@ -12,6 +12,14 @@ void DeviceAnnouncer::schedule(Clock::time_point when, std::function<void()> ann
   changed_.notify_all();
 }
 
+void DeviceAnnouncer::finishDue(Clock::time_point until, Clock::duration slack) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (std::this_thread::get_id() == thread_.get_id()) return;
+  changed_.wait_until(lock, until + slack, [this, until] {
+    return stopping_ || (!announcing_ && (pending_.empty() || pending_.begin()->first > until));
+  });
+}
+
 void DeviceAnnouncer::stop() {
   std::thread thread;
   {
@@ -39,9 +47,12 @@ void DeviceAnnouncer::run() {
     std::function<void()> announce = std::move(pending_.begin()->second);
     pending_.erase(pending_.begin());
     // The host's listeners run inside; they may open or close devices, which can schedule more.
+    announcing_ = true;
     lock.unlock();
     announce();
     lock.lock();
+    announcing_ = false;
+    changed_.notify_all();  // finishDue() may wait for this one
   }
 }
 

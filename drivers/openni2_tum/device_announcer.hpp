@@ -23,6 +23,9 @@ class DeviceAnnouncer {
 
   // Runs `announce` at `when` (or at once if that has passed), after earlier ones.
   void schedule(Clock::time_point when, std::function<void()> announce);
+  // Waits until every announcement due by `until` has run, giving up `slack` after `until`.
+  // Returns at once on the announcer's own thread (a listener that closes a device in response).
+  void finishDue(Clock::time_point until, Clock::duration slack);
   // Drops what is still pending and waits for a running announcement to finish.
   void stop();
 
@@ -33,7 +36,8 @@ class DeviceAnnouncer {
   std::condition_variable changed_;
   std::multimap<Clock::time_point, std::function<void()>> pending_;
   bool stopping_ = false;
-  std::thread thread_;  // started with the first announcement
+  bool announcing_ = false;  // an announcement runs outside the lock
+  std::thread thread_;       // started with the first announcement
 };
 
 }  // namespace rgbdmap::openni2_tum

@@ -1,5 +1,6 @@
 #include "tum_driver.hpp"
 
+#include <chrono>
 #include <cstdlib>
 #include <exception>
 #include <sstream>
@@ -11,6 +12,11 @@
 
 namespace rgbdmap::openni2_tum {
 namespace {
+
+// Closing a device waits for a replug due within this (longer ones are announced by the timer
+// alone, and can still meet a host's shutdown), and for announcements late by up to the slack.
+constexpr std::chrono::seconds kReplugWaitedForOnClose{5};
+constexpr std::chrono::seconds kAnnouncementSlack{5};
 
 // OpenNI2 only needs a non-null handle for a frame sync group: the devices give the depth and
 // colour frames of a pair the same index, which is all its SyncedStreamsFrameHolder matches.
@@ -112,7 +118,15 @@ oni::driver::DeviceBase* TumDriver::deviceOpen(const char* uri, const char* /*mo
 }
 
 void TumDriver::deviceClose(oni::driver::DeviceBase* device) {
+  // OpenNI2 holds its device lock while it destroys the drivers, and announcing takes that lock:
+  // an announcement that starts while a host shuts down can neither finish nor be waited for (a
+  // recorder that stopped at the frame that unplugged the camera hung there). So the unplug
+  // (scheduled by the playback thread this joins) and a replug due soon go out before the
+  // close returns; a host that closes its devices before shutting down never meets one. The
+  // slack bounds the wait of a host that shuts down with the device open, closing it under the
+  // lock.
   delete static_cast<TumDevice*>(device);
+  announcer_.finishDue(DeviceAnnouncer::Clock::now() + kReplugWaitedForOnClose, kAnnouncementSlack);
 }
 
 void TumDriver::unplug(const std::shared_ptr<VirtualCamera>& camera) {
