@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <thread>
 
 #include "rgbdmap/base/config.hpp"
@@ -45,10 +46,15 @@ class SignalThread {
     pthread_kill(thread_.native_handle(), SIGUSR1);  // wakes it now rather than at its timeout
     thread_.join();
   }
-  // From here on SIGUSR1 asks the pipeline for a checkpoint of `map_path`.
-  void mappingStarts(const std::string& map_path) {
+  // From here on SIGUSR1 asks the pipeline for a checkpoint of `map_path` and a stop drains and
+  // saves. Returns false when a stop came first: then nothing is mapped. One lock orders the two,
+  // so a stop during start-up never ends in a saved map (its message said none would be).
+  bool mappingStarts(const std::string& map_path) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (control_.stop.load()) return false;
     map_path_ = map_path;
-    mapping_.store(true);
+    mapping_ = true;
+    return true;
   }
   static void blockInThisThread() {
     sigset_t set = signals();
@@ -76,7 +82,8 @@ class SignalThread {
     while (!done_.load()) {
       const int sig = sigtimedwait(&set, nullptr, &timeout);
       if (done_.load()) break;
-      const bool mapping = mapping_.load();
+      std::lock_guard<std::mutex> lock(mutex_);
+      const bool mapping = mapping_;
       if (sig == SIGUSR1) {
         if (mapping) {
           spdlog::info("SIGUSR1: writing a checkpoint");
@@ -104,8 +111,9 @@ class SignalThread {
   }
 
   rgbdmap::RunControl& control_;
-  std::string map_path_;  // written before mapping_ is set, read after
-  std::atomic<bool> mapping_{false};
+  std::mutex mutex_;  // orders mappingStarts() and the handling of a signal
+  std::string map_path_;
+  bool mapping_ = false;
   std::atomic<bool> done_{false};
   std::thread thread_;
 };
@@ -186,8 +194,11 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
   int code = 0;
+  if (!signals.mappingStarts(o.out)) {
+    stoppedDuringStartUp(control);
+    return 0;
+  }
   {
-    signals.mappingStarts(o.out);
     const std::unique_ptr<Viewer> viewer = openRunViewer(o.viewer, control, o.out);
     if (viewer) outputs.publisher = &viewer->mailbox();
     Pipeline pipeline(config, std::move(source), outputs);
