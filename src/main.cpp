@@ -193,11 +193,11 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
-  int code = 0;
   if (!signals.mappingStarts(o.out)) {
     stoppedDuringStartUp(control);
     return 0;
   }
+  int code = 0;
   {
     const std::unique_ptr<Viewer> viewer = openRunViewer(o.viewer, control, o.out);
     if (viewer) outputs.publisher = &viewer->mailbox();
