@@ -2,6 +2,7 @@
 # dependencies keep pointing one way:
 #   tools, runtime/main -> viewer -> runtime (the core never includes the viewer)
 #   tools, runtime/main -> runtime -> mapping -> tracking -> capture -> base
+#                          runtime -> slam -> tracking (loop closure; mapping never sees it)
 #                          runtime -> drivers -> capture;   eval -> sim -> base;   eval -> capture
 #   launcher (the `rgbdmap` command: libc only, includes no rgbdmap header)
 # Run as a build step: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
@@ -10,16 +11,17 @@ set(allowed_base base)
 set(allowed_capture base capture)
 set(allowed_tracking base capture tracking)
 set(allowed_mapping base capture tracking mapping)
+set(allowed_slam base capture tracking slam)
 set(allowed_sim base sim)
 set(allowed_eval base capture sim eval)
 set(allowed_drivers base capture drivers)
-set(allowed_runtime base capture tracking mapping drivers runtime)
-set(allowed_viewer base capture tracking mapping runtime viewer)
-set(allowed_tools base capture tracking mapping drivers runtime sim eval viewer tools)
+set(allowed_runtime base capture tracking mapping slam drivers runtime)
+set(allowed_viewer base capture tracking mapping slam runtime viewer)
+set(allowed_tools base capture tracking mapping slam drivers runtime sim eval viewer tools)
 set(allowed_launcher "")
 
 set(violations "")
-foreach(layer base capture tracking mapping sim eval drivers runtime viewer tools launcher)
+foreach(layer base capture tracking mapping slam sim eval drivers runtime viewer tools launcher)
   file(GLOB_RECURSE files
     ${SOURCE_DIR}/src/${layer}/*.c
     ${SOURCE_DIR}/src/${layer}/*.cpp ${SOURCE_DIR}/src/${layer}/*.hpp

@@ -32,9 +32,20 @@ std::string statisticsJson(const char* prefix, const ErrorStatistics& s, const c
 }
 
 int evaluateMapCommand(const std::string& map_path, const std::string& scene, double tau,
-                       const std::string& json) {
+                       const std::string& trajectory, const std::string& json) {
   const SyntheticGroundTruth truth = loadSyntheticGroundTruth(scene);
-  const pcl::PointCloud<pcl::PointXYZRGB> map = loadMapFile(map_path);
+  pcl::PointCloud<pcl::PointXYZRGB> map = loadMapFile(map_path);
+  if (!trajectory.empty()) {
+    // A map made from odometry lives in its first camera's frame: moved onto the scene's by the
+    // alignment that scores its trajectory (ATE), so the score is the map's, not the frame's.
+    const Trajectory estimate = Trajectory::load(trajectory);
+    const Trajectory groundtruth = Trajectory::load(scene + "/groundtruth.txt");
+    const AbsoluteTrajectoryError ate = absoluteTrajectoryError(estimate, groundtruth);
+    const Eigen::Isometry3f alignment = ate.alignment.cast<float>();
+    for (auto& p : map.points) p.getVector3fMap() = alignment * p.getVector3fMap();
+    std::printf("aligned     by %s (ATE %.2f mm over %zu poses)\n", trajectory.c_str(),
+                1000.0 * ate.translation.rmse, ate.translation.count);
+  }
   const MapScore s = evaluateMap(map, truth.scene, truth.visible_surface, tau);
   std::printf("map         %s (%zu points)\n", map_path.c_str(), s.map_points);
   std::printf("reference   %s (%zu visible surface samples)\n", scene.c_str(), s.reference_points);
@@ -89,7 +100,7 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
   cmd->require_subcommand(1);
 
   struct MapOptions {
-    std::string map, scene, json;
+    std::string map, scene, json, trajectory;
     double tau = 0.01;
   };
   auto m = std::make_shared<MapOptions>();
@@ -104,9 +115,15 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
   map_cmd->add_option("--tau", m->tau, "distance threshold (m)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  map_cmd->add_option("--trajectory", m->trajectory,
+                      "the map's trajectory (e.g. MAP_trajectory.txt): the map is first moved by "
+                      "the alignment of this trajectory to the scene's groundtruth.txt (maps "
+                      "made with odometry are in the first camera's frame)");
   map_cmd->add_option("--json", m->json, "also write the results as JSON");
   map_cmd->callback([m, &selected] {
-    selected = [m] { return evaluateMapCommand(m->map, m->scene, m->tau, m->json); };
+    selected = [m] {
+      return evaluateMapCommand(m->map, m->scene, m->tau, m->trajectory, m->json);
+    };
   });
 
   struct TrajectoryOptions {

@@ -60,6 +60,12 @@ std::string RunStats::toJson() const {
       << "  \"frames_lost\": " << frames_lost << ",\n"
       << "  \"frames_relocalised\": " << frames_relocalised << ",\n"
       << "  \"keyframes_deferred\": " << keyframes_deferred << ",\n"
+      << "  \"loop_closure\": " << (loop_closure ? "true" : "false") << ",\n"
+      << "  \"loop_candidates\": " << loop_candidates << ",\n"
+      << "  \"loops_verified\": " << loops_verified << ",\n"
+      << "  \"loops_accepted\": " << loops_accepted << ",\n"
+      << "  \"loops_rejected\": " << loops_rejected << ",\n"
+      << "  \"loop_keyframes_unsearched\": " << loop_keyframes_unsearched << ",\n"
       << "  \"wall_seconds\": " << wall_seconds << ",\n"
       << "  \"frames_per_second\": "
       << (wall_seconds > 0 ? static_cast<double>(frames_processed) / wall_seconds : 0.0) << ",\n"
@@ -72,7 +78,9 @@ std::string RunStats::toJson() const {
   latency("filter", filter_latency, false);
   latency("project", project_latency, false);
   latency("fuse", fuse_latency, false);
-  latency("integrate", integrate_latency, true);
+  latency("integrate", integrate_latency, false);
+  latency("loop", loop_latency, false);
+  latency("optimise", optimise_latency, true);
   out << "  }\n}\n";
   return out.str();
 }

@@ -10,23 +10,19 @@ namespace {
 // a pose does not allocate in a run of ordinary length; longer runs grow it rarely (doubling).
 constexpr std::size_t kReservedFrames = 1 << 15;
 
-Trajectory reservedTrajectory() {
-  std::vector<StampedPose> poses;
-  poses.reserve(kReservedFrames);
-  return Trajectory(std::move(poses));
-}
-
 }  // namespace
 
 FrameTracker::FrameTracker(const Config& config, std::unique_ptr<PoseProvider> poses,
-                           RunStats& stats)
+                           RunStats& stats, const PoseCorrections* corrections)
     : poses_(std::move(poses)),
       selector_(makeKeyframeSelector(config)),
-      trajectory_(reservedTrajectory()),
-      stats_(stats) {}
+      trajectory_(kReservedFrames),
+      stats_(stats),
+      corrections_(corrections) {}
 
 bool FrameTracker::track(Frame& frame) {
   const auto start = std::chrono::steady_clock::now();
+  frame.anchor = -1;  // frames are reused: only a tracker that anchors them sets it
   const bool posed = poses_->estimate(frame);
   stats_.pose_latency.record(
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
@@ -45,7 +41,7 @@ bool FrameTracker::track(Frame& frame) {
       break;
   }
   stats_.tracking_lost.store(state == TrackingState::kLost, std::memory_order_relaxed);
-  if (posed || state == TrackingState::kLost) trajectory_.push_back({frame.timestamp, frame.pose});
+  if (posed || state == TrackingState::kLost) trajectory_.push_back(frame.timestamp, frame.pose, frame.anchor);
   if (!posed) {
     stats_.frames_without_pose.fetch_add(1, std::memory_order_relaxed);
     return false;

@@ -1,28 +1,75 @@
 #include "rgbdmap/mapping/mapper.hpp"
 
+#include "rgbdmap/mapping/point_merger.hpp"
+
 namespace rgbdmap {
-
-Mapper::Mapper(const Config& config, RunStats& stats)
-    : integrator_(config),
-      map_(config.voxel_size, static_cast<std::uint32_t>(config.map_min_observations)),
-      stats_(stats) {}
-
 namespace {
+
 // The point count shown while mapping is refreshed every this many keyframes (counting costs
 // about a tenth of a fusion); a snapshot gives the exact count.
 constexpr std::uint64_t kCountPointsEvery = 10;
+
+double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+
 }  // namespace
 
+Mapper::Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections)
+    : integrator_(config),
+      voxel_size_(config.voxel_size),
+      min_observations_(static_cast<std::uint32_t>(config.map_min_observations)),
+      loop_(config.loop),
+      corrections_(corrections),
+      map_(voxel_size_, min_observations_),
+      stats_(stats) {}
+
+bool Mapper::startsSubmap(const Frame& keyframe) const {
+  if (!corrections_ || keyframe.anchor < 0) return false;
+  if (active_anchor_ < 0) return true;  // the first anchored keyframe
+  const Eigen::Isometry3d moved = active_start_.inverse() * keyframe.pose;
+  return active_keyframes_ >= loop_.submap_keyframes ||
+         moved.translation().norm() > loop_.submap_distance ||
+         angle(moved) > loop_.submap_rotation;
+}
+
+void Mapper::closeSubmap() {
+  if (active_keyframes_ > 0) {
+    Submap submap;
+    submap.anchor = active_anchor_;
+    map_.extract(submap.points);
+    submap.points.shrink_to_fit();
+    closed_points_ += submap.points.size();
+    closed_.push_back(std::move(submap));
+  }
+  map_ = VoxelMap(voxel_size_, min_observations_);  // lets the TSDF's memory go
+  active_keyframes_ = 0;
+}
+
 void Mapper::fuse(const Frame& keyframe) {
+  if (startsSubmap(keyframe)) {
+    closeSubmap();
+    active_anchor_ = keyframe.anchor;
+    active_start_ = keyframe.pose;
+  }
   integrator_.integrate(keyframe, map_, stats_);
-  keyframes_.push_back({keyframe.timestamp, keyframe.pose});
+  ++active_keyframes_;
+  keyframes_.push_back(keyframe.timestamp, keyframe.pose, keyframe.anchor);
   const std::uint64_t fused = stats_.keyframes.fetch_add(1) + 1;
-  if (fused % kCountPointsEvery == 1) stats_.map_points.store(map_.pointCount());
+  if (fused % kCountPointsEvery == 1) stats_.map_points.store(closed_points_ + map_.pointCount());
 }
 
 std::shared_ptr<MapCloud> Mapper::snapshot() const {
   auto cloud = std::make_shared<MapCloud>();
-  map_.extract(*cloud);
+  if (!corrections_ || (closed_.empty() && active_anchor_ < 0)) {
+    map_.extract(*cloud);
+  } else {
+    const PoseCorrections::Snapshot correction = corrections_->snapshot();
+    PointMerger merger(voxel_size_);
+    for (const Submap& submap : closed_) merger.add(submap.points, correction.of(submap.anchor));
+    std::vector<VoxelMap::SurfacePoint> active;
+    map_.extract(active);
+    merger.add(active, correction.of(active_anchor_));
+    merger.extract(*cloud);
+  }
   stats_.map_points.store(cloud->size());  // what is written
   return cloud;
 }

@@ -14,6 +14,7 @@ void copyFrame(const Frame& from, Frame& to) {
   from.color.copyTo(to.color);
   to.has_pose = from.has_pose;
   to.pose = from.pose;
+  to.anchor = from.anchor;
   to.origin.assign(from.origin);
   to.captured_at = from.captured_at;
 }

@@ -16,6 +16,8 @@
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "rgbdmap/runtime/unmapped_frames.hpp"
+#include "rgbdmap/slam/loop_closer.hpp"
+#include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -46,11 +48,17 @@ class FirstError {
   std::string message_;
 };
 
+// " | loops N" while loop closure runs (the status line says when a loop closed).
+std::string loops(const RunStats& s) {
+  if (!s.loop_closure) return "";
+  return " | loops " + std::to_string(s.loops_accepted.load());
+}
+
 std::string statusLine(const RunStats& s, double elapsed) {
   char line[256];
   std::snprintf(line, sizeof line,
                 "frames %llu read, %llu dropped, %llu skipped | %.1f fps | keyframes %llu | map "
-                "%llu points | queue %llu%s",
+                "%llu points | queue %llu%s%s",
                 static_cast<unsigned long long>(s.frames_captured.load()),
                 static_cast<unsigned long long>(s.frames_dropped.load()),
                 static_cast<unsigned long long>(s.frames_skipped.load()),
@@ -58,7 +66,7 @@ std::string statusLine(const RunStats& s, double elapsed) {
                 static_cast<unsigned long long>(s.keyframes.load()),
                 static_cast<unsigned long long>(s.map_points.load()),
                 static_cast<unsigned long long>(s.queue_depth.load()),
-                s.tracking_lost.load() ? " | tracking lost" : "");
+                loops(s).c_str(), s.tracking_lost.load() ? " | tracking lost" : "");
   return line;
 }
 
@@ -84,11 +92,21 @@ Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineO
 int Pipeline::run(RunControl& control) {
   const CameraIntrinsics camera = source_->intrinsics();
   config_.camera = camera;
-  FrameTracker tracker(config_, makePoseProvider(config_), stats_);
-  Mapper mapper(config_, stats_);
+  // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
+  // move the trajectories and the map's submaps.
+  stats_.loop_closure = config_.loop.enabled && tracksKeyframes(config_);
+  std::unique_ptr<PoseCorrections> corrections;
+  std::unique_ptr<LoopCloser> loop_closer;
+  if (stats_.loop_closure) {
+    corrections = std::make_unique<PoseCorrections>();
+    loop_closer = std::make_unique<LoopCloser>(config_, *corrections, stats_, !source_->isLive());
+  }
+  FrameTracker tracker(config_, makePoseProvider(config_, loop_closer.get()), stats_,
+                       corrections.get());
+  Mapper mapper(config_, stats_, corrections.get());
   spdlog::info("source: {}", source_->describe());
-  spdlog::info("poses: {}, keyframes: {}", tracker.poses().describe(),
-               effectiveKeyframePolicy(config_));
+  spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
+               effectiveKeyframePolicy(config_), stats_.loop_closure ? "on" : "off");
   if (!outputs_.config_path.empty()) {
     std::ofstream(outputs_.config_path) << config_.toYaml();
   }
@@ -198,6 +216,9 @@ int Pipeline::run(RunControl& control) {
             else
               stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
           }
+          // The viewer is shown the pose after loop closures, like the written trajectory.
+          if (corrections && outputs_.publisher)
+            frame->pose = corrections->snapshot().apply(frame->anchor, frame->pose);
           publication.afterFrame(*frame, tracker.state(), stats_, keyframe);
           if (publication.mapDue(stats_))
             fusion.request(MapRequest::kViewer,
@@ -252,6 +273,7 @@ int Pipeline::run(RunControl& control) {
   }
   capture.join();
   tracking.join();
+  if (loop_closer) loop_closer->finish();  // every keyframe searched: final corrections
   if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());
   fusion.finish();
   stats_.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();

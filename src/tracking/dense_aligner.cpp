@@ -207,8 +207,8 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
           points.empty() ? 0.0 : static_cast<double>(landed) / static_cast<double>(points.size());
       result.intensity_sigma = sigma_i;
       if (landed > 0) {
-        Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H / static_cast<double>(landed),
-                                                    Eigen::EigenvaluesOnly);
+        result.information = H / static_cast<double>(landed);
+        Eigen::SelfAdjointEigenSolver<Matrix6d> eig(result.information, Eigen::EigenvaluesOnly);
         result.min_information = eig.eigenvalues()(0);
       }
     }

@@ -28,13 +28,14 @@ Eigen::Isometry3d rigid(const Eigen::Isometry3d& t) {
 }  // namespace
 
 DenseTracker::DenseTracker(const CameraIntrinsics& camera, const TrackingOptions& options,
-                           float min_depth, float max_depth)
+                           float min_depth, float max_depth, KeyframeSink* sink)
     : camera_(camera),
       options_(options),
       min_depth_(min_depth),
       max_depth_(max_depth),
       aligner_(options),
-      relocaliser_(camera, options.relocalisation_min_inliers, min_depth, max_depth) {}
+      relocaliser_(camera, options.relocalisation_min_inliers, min_depth, max_depth),
+      sink_(sink) {}
 
 DenseTracker::~DenseTracker() = default;
 
@@ -63,8 +64,24 @@ const char* DenseTracker::reject(const AlignmentResult& result, const Eigen::Iso
   return nullptr;
 }
 
-void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose) {
+void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose,
+                                const Keyframe* from, const AlignmentResult& alignment) {
+  if (sink_) {  // before `from` may leave the window below
+    TrackedKeyframe out;
+    out.id = keyframes_made_;
+    out.timestamp = frame.timestamp;
+    out.pose = pose;
+    if (from) {
+      out.reference = static_cast<std::int64_t>(from->id);
+      out.from_reference = rigid(from->pose.inverse() * pose);
+      out.information = alignment.information;
+    }
+    out.color = frame.color.clone();
+    out.depth = frame.depth.clone();
+    sink_->addKeyframe(std::move(out));
+  }
   auto keyframe = std::make_shared<Keyframe>();
+  keyframe->id = keyframes_made_;
   keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
                             static_cast<float>(options_.min_gradient));
   keyframe->pose = pose;
@@ -77,6 +94,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
 }
 
 bool DenseTracker::accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state) {
+  frame.anchor = static_cast<std::int64_t>(keyframe_->id);
   frame.pose = pose;
   frame.has_pose = true;
   last_pose_ = pose;
@@ -87,6 +105,7 @@ bool DenseTracker::accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingS
 
 bool DenseTracker::lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why) {
   loss_reason_ = why;
+  frame.anchor = keyframe_ ? static_cast<std::int64_t>(keyframe_->id) : -1;
   frame.pose = predicted;
   frame.has_pose = false;
   state_ = TrackingState::kLost;
@@ -105,7 +124,7 @@ bool DenseTracker::estimate(Frame& frame) {
     // Nothing to track against yet: the first frame with depth starts the world frame.
     if (!enough_depth) return lose(frame, Eigen::Isometry3d::Identity(), "no depth");
     started_ = true;
-    makeKeyframe(frame, Eigen::Isometry3d::Identity());
+    makeKeyframe(frame, Eigen::Isometry3d::Identity(), nullptr, AlignmentResult{});
     velocity_.setIdentity();
     return accept(frame, Eigen::Isometry3d::Identity(), TrackingState::kTracked);
   }
@@ -144,7 +163,7 @@ bool DenseTracker::estimate(Frame& frame) {
   if (from_keyframe.translation().norm() > options_.keyframe_translation ||
       angle(from_keyframe) > options_.keyframe_rotation ||
       last_result_.overlap < options_.keyframe_min_overlap)
-    makeKeyframe(frame, pose);
+    makeKeyframe(frame, pose, keyframe_.get(), last_result_);
   return true;
 }
 

@@ -6,7 +6,11 @@
 
 namespace rgbdmap {
 
-std::unique_ptr<PoseProvider> makePoseProvider(const Config& config) {
+bool tracksKeyframes(const Config& config) {
+  return config.pose_source == "odometry" && config.tracking.method == "dense";
+}
+
+std::unique_ptr<PoseProvider> makePoseProvider(const Config& config, KeyframeSink* sink) {
   if (config.pose_source == "trajectory") {
     if (config.pose_trajectory.empty())
       throw InputError("pose.source=trajectory needs pose.trajectory=FILE");
@@ -21,7 +25,7 @@ std::unique_ptr<PoseProvider> makePoseProvider(const Config& config) {
                          std::to_string(tracking.coarsest_level) + ")");
       return std::make_unique<DenseTracker>(config.camera, tracking,
                                             static_cast<float>(config.min_depth),
-                                            static_cast<float>(config.max_depth));
+                                            static_cast<float>(config.max_depth), sink);
     }
     RgbdOdometryPoses::Options options;
     options.icp = tracking.method == "opencv_rgbd_icp";

@@ -27,11 +27,19 @@ void Relocaliser::describe(RelocalisationView& view) {
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
   orb_->detectAndCompute(view.gray, cv::noArray(), keypoints, descriptors);
+  attachPoints(keypoints, descriptors, view.depth, view);
+  view.gray.release();
+  view.depth.release();
+}
+
+void Relocaliser::attachPoints(const std::vector<cv::KeyPoint>& keypoints,
+                               const cv::Mat& descriptors, const cv::Mat& depth,
+                               RelocalisationView& view) const {
   std::vector<cv::Point2f> pixels;
   std::vector<int> rows;
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
     const cv::Point2f& p = keypoints[i].pt;
-    const float z = view.depth.at<float>(cvRound(p.y), cvRound(p.x));
+    const float z = depth.at<float>(cvRound(p.y), cvRound(p.x));
     if (!(z >= min_depth_ && z <= max_depth_)) continue;
     pixels.push_back(p);
     rows.push_back(static_cast<int>(i));
@@ -43,7 +51,7 @@ void Relocaliser::describe(RelocalisationView& view) {
     std::vector<cv::Point2f> rays;
     cv::undistortPoints(pixels, rays, camera_.cameraMatrix(), camera_.distortion());
     for (std::size_t i = 0; i < rays.size(); ++i) {
-      const float z = view.depth.at<float>(cvRound(pixels[i].y), cvRound(pixels[i].x));
+      const float z = depth.at<float>(cvRound(pixels[i].y), cvRound(pixels[i].x));
       view.points.emplace_back(rays[i].x * z, rays[i].y * z, z);
       view.descriptors.push_back(descriptors.row(rows[i]));
     }
@@ -58,27 +66,50 @@ void Relocaliser::prepare(const Frame& frame) {
   orb_->detectAndCompute(gray, cv::noArray(), current_keypoints_, current_descriptors_);
 }
 
-std::optional<Eigen::Isometry3d> Relocaliser::locate(RelocalisationView& keyframe) {
-  if (!keyframe.described) describe(keyframe);
-  if (keyframe.descriptors.rows < min_inliers_ || current_descriptors_.rows < min_inliers_)
-    return std::nullopt;
+void Relocaliser::describePrepared(const cv::Mat& depth, RelocalisationView& view) const {
+  view.gray.release();
+  view.depth.release();
+  attachPoints(current_keypoints_, current_descriptors_, depth, view);
+}
+
+void Relocaliser::ratioMatches(const RelocalisationView& keyframe,
+                               std::vector<cv::DMatch>& matches) {
+  matches.clear();
+  if (keyframe.descriptors.rows < 2 || current_descriptors_.rows < 2) return;
   // Lowe's ratio test on the two nearest neighbours keeps distinctive matches only.
   std::vector<std::vector<cv::DMatch>> knn;
   matcher_->knnMatch(keyframe.descriptors, current_descriptors_, knn, 2);
+  for (const auto& m : knn)
+    if (m.size() == 2 && m[0].distance <= 0.8f * m[1].distance) matches.push_back(m[0]);
+}
+
+int Relocaliser::similarity(RelocalisationView& keyframe) {
+  if (!keyframe.described) describe(keyframe);
+  std::vector<cv::DMatch> matches;
+  ratioMatches(keyframe, matches);
+  return static_cast<int>(matches.size());
+}
+
+std::optional<Eigen::Isometry3d> Relocaliser::locate(RelocalisationView& keyframe, int* inliers) {
+  if (!keyframe.described) describe(keyframe);
+  if (keyframe.descriptors.rows < min_inliers_ || current_descriptors_.rows < min_inliers_)
+    return std::nullopt;
+  std::vector<cv::DMatch> matches;
+  ratioMatches(keyframe, matches);
   std::vector<cv::Point3f> object;
   std::vector<cv::Point2f> image;
-  for (const auto& m : knn) {
-    if (m.size() < 2 || m[0].distance > 0.8f * m[1].distance) continue;
-    object.push_back(keyframe.points[static_cast<std::size_t>(m[0].queryIdx)]);
-    image.push_back(current_keypoints_[static_cast<std::size_t>(m[0].trainIdx)].pt);
+  for (const cv::DMatch& m : matches) {
+    object.push_back(keyframe.points[static_cast<std::size_t>(m.queryIdx)]);
+    image.push_back(current_keypoints_[static_cast<std::size_t>(m.trainIdx)].pt);
   }
   if (static_cast<int>(object.size()) < min_inliers_) return std::nullopt;
   cv::Mat rvec, tvec;
-  std::vector<int> inliers;
+  std::vector<int> inlier_rows;
   if (!cv::solvePnPRansac(object, image, camera_.cameraMatrix(), camera_.distortion(), rvec, tvec,
-                          false, 200, 3.0f, 0.99, inliers, cv::SOLVEPNP_EPNP) ||
-      static_cast<int>(inliers.size()) < min_inliers_)
+                          false, 200, 3.0f, 0.99, inlier_rows, cv::SOLVEPNP_EPNP) ||
+      static_cast<int>(inlier_rows.size()) < min_inliers_)
     return std::nullopt;
+  if (inliers) *inliers = static_cast<int>(inlier_rows.size());
   cv::Mat R;
   cv::Rodrigues(rvec, R);
   Eigen::Matrix3d r;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/loop_options.hpp"
 #include "rgbdmap/base/tracking_options.hpp"
 
 namespace rgbdmap {
@@ -29,6 +30,7 @@ struct Config {
   double pose_max_gap = 0.05;        // pose.max_gap: s to the nearest ground truth sample
 
   TrackingOptions tracking;  // tracking.*: odometry for sources without ground truth
+  LoopOptions loop;          // loop.*: loop closure for the dense tracker
 
   std::string keyframe_policy = "auto";    // keyframe.policy: auto | interval | motion | both
   int keyframe_every_n = 10;               // keyframe.every_n

@@ -31,6 +31,9 @@ struct Frame {
   cv::Mat color;            // CV_8UC3, BGR (OpenCV order)
   bool has_pose = false;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // camera-to-world
+  // The tracking keyframe the pose was estimated against (-1: none, e.g. ground truth): a loop
+  // closure that moves that keyframe moves this pose with it (see PoseCorrections).
+  std::int64_t anchor = -1;
   std::string origin;        // where it came from, for messages (a file name or device)
   double captured_at = 0.0;  // steady-clock seconds when the capture thread queued it
 };

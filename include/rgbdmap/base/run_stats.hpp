@@ -48,6 +48,16 @@ struct RunStats {
   // proposed instead, nothing is dropped.
   std::atomic<std::uint64_t> keyframes_deferred{0};
   std::atomic<bool> tracking_lost{false};  // the last frame was lost (status line)
+  // Loop closure: earlier keyframes that looked like the newest one and were checked
+  // geometrically, those that passed, loops accepted into the pose graph, loops refused
+  // (implausible, no second loop agreed, or the optimised graph disagreed), and keyframes a
+  // busy loop thread could not search (live sources only).
+  std::atomic<std::uint64_t> loop_candidates{0};
+  std::atomic<std::uint64_t> loops_verified{0};
+  std::atomic<std::uint64_t> loops_accepted{0};
+  std::atomic<std::uint64_t> loops_rejected{0};
+  std::atomic<std::uint64_t> loop_keyframes_unsearched{0};
+  bool loop_closure = false;  // the run closes loops (set before the threads start)
 
   LatencyHistogram read_latency;       // capture: read + decode + convert
   LatencyHistogram filter_latency;     // mapping: depth filtering
@@ -57,6 +67,8 @@ struct RunStats {
   LatencyHistogram pose_latency;       // pose estimation
   LatencyHistogram track_latency;      // tracking thread, per frame: pose, keyframe?, hand-off
   LatencyHistogram queue_latency;      // capture-to-mapping: time a frame waited in the queue
+  LatencyHistogram loop_latency;       // loop thread, per keyframe: graph, place recognition
+  LatencyHistogram optimise_latency;   // pose graph optimisation, per accepted loop closure
 
   double wall_seconds = 0.0;
   double peak_rss_mb = 0.0;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/run_stats.hpp"
@@ -8,27 +9,52 @@
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
+#include "rgbdmap/tracking/anchored_trajectory.hpp"
+#include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {
 
 // The map half of mapping, independent of threads and sources: keyframes (with their poses, from
 // FrameTracker) are fused into the map in the order given, and remembered as the keyframe
 // trajectory. Owned and driven by the fusion thread.
+//
+// Without loop closure the map is one TSDF in the world frame. With it (`corrections` given),
+// keyframes are fused, at their odometry poses, into a submap anchored to the tracking keyframe
+// of its first keyframe; a full submap is reduced to its surface points and a new one starts.
+// The map written is every submap moved by its anchor's latest correction and merged voxel by
+// voxel: when a loop closes, whole submaps move with the graph and nothing is fused again.
 class Mapper {
  public:
-  Mapper(const Config& config, RunStats& stats);
+  Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections = nullptr);
 
   void fuse(const Frame& keyframe);
 
   // A copy of the map as a point cloud (what a checkpoint writes).
   std::shared_ptr<MapCloud> snapshot() const;
-  const VoxelMap& map() const { return map_; }
-  const Trajectory& keyframeTrajectory() const { return keyframes_; }
+  // The fused keyframes' poses, corrected by the latest loop closures.
+  Trajectory keyframeTrajectory() const { return keyframes_.resolve(corrections_); }
+  std::size_t submaps() const { return closed_.size() + 1; }
 
  private:
+  struct Submap {
+    std::int64_t anchor = -1;
+    std::vector<VoxelMap::SurfacePoint> points;  // in the odometry frame
+  };
+  bool startsSubmap(const Frame& keyframe) const;
+  void closeSubmap();
+
   KeyframeIntegrator integrator_;
-  VoxelMap map_;
-  Trajectory keyframes_;
+  double voxel_size_;
+  std::uint32_t min_observations_;
+  LoopOptions loop_;
+  const PoseCorrections* corrections_;
+  VoxelMap map_;  // the active submap (the whole map without loop closure)
+  std::int64_t active_anchor_ = -1;
+  Eigen::Isometry3d active_start_ = Eigen::Isometry3d::Identity();
+  int active_keyframes_ = 0;
+  std::vector<Submap> closed_;
+  std::size_t closed_points_ = 0;
+  AnchoredTrajectory keyframes_;
   RunStats& stats_;
 };
 

@@ -29,6 +29,10 @@ struct AlignmentResult {
   double overlap = 0.0;          // fraction of the keyframe's pixels that landed in the frame
   double intensity_sigma = 0.0;  // robust std-dev of the intensity residual, finest level
   double min_information = 0.0;  // smallest eigenvalue of the normalised Hessian, finest level
+  // The Gauss-Newton Hessian at the finest level divided by the pixels that landed: the
+  // information one aligned pixel gives about `motion` ([translation, rotation], left
+  // increments), what a pose graph weighs this alignment by.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   bool finite = false;
 };
 

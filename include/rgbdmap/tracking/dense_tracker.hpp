@@ -6,6 +6,7 @@
 #include "rgbdmap/base/tracking_options.hpp"
 #include "rgbdmap/tracking/dense_aligner.hpp"
 #include "rgbdmap/tracking/image_pyramid.hpp"
+#include "rgbdmap/tracking/keyframe_sink.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "rgbdmap/tracking/relocaliser.hpp"
 
@@ -18,10 +19,13 @@ namespace rgbdmap {
 // loses the frame: it keeps the predicted pose and is not mapped. While lost, each frame is
 // matched against recent keyframes (dense from the last good pose, then ORB + PnP refined
 // densely) until one passes the same checks. The first frame defines the world frame.
+// Every frame is anchored to the keyframe it was tracked against (Frame::anchor), and each new
+// keyframe goes to the sink, if any (the loop closer), with the motion measured from its
+// reference keyframe.
 class DenseTracker : public PoseProvider {
  public:
   DenseTracker(const CameraIntrinsics& camera, const TrackingOptions& options, float min_depth,
-               float max_depth);
+               float max_depth, KeyframeSink* sink = nullptr);
   ~DenseTracker() override;
 
   bool estimate(Frame& frame) override;
@@ -36,6 +40,7 @@ class DenseTracker : public PoseProvider {
 
  private:
   struct Keyframe {
+    std::uint64_t id = 0;
     AlignmentReference reference;
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     RelocalisationView view;  // features for relocalisation
@@ -43,7 +48,9 @@ class DenseTracker : public PoseProvider {
   // Why an alignment was rejected, or nullptr when it is plausible.
   const char* reject(const AlignmentResult& result, const Eigen::Isometry3d& pose,
                      const Eigen::Isometry3d& predicted, double dt, bool check_jump) const;
-  void makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose);
+  // `from`: the keyframe the frame was tracked against (null for the first), with the alignment.
+  void makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose, const Keyframe* from,
+                    const AlignmentResult& alignment);
   bool relocalise(const Frame& frame, Eigen::Isometry3d& pose);
   bool accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state);
   bool lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why);
@@ -54,6 +61,7 @@ class DenseTracker : public PoseProvider {
   DenseAligner aligner_;
   ImagePyramid pyramid_;
   Relocaliser relocaliser_;
+  KeyframeSink* sink_;
   std::deque<std::shared_ptr<Keyframe>> keyframes_;  // most recent last
   std::shared_ptr<Keyframe> keyframe_;               // the one tracked against
   AlignmentResult last_result_;

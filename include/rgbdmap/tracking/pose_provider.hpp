@@ -6,6 +6,7 @@
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/tracking/keyframe_sink.hpp"
 
 namespace rgbdmap {
 
@@ -66,7 +67,11 @@ class TrajectoryPoses : public PoseProvider {
   TrackingState state_ = TrackingState::kNoPose;
 };
 
-// Builds the provider named by config pose.source. Odometry needs the camera intrinsics.
-std::unique_ptr<PoseProvider> makePoseProvider(const Config& config);
+// Builds the provider named by config pose.source. Odometry needs the camera intrinsics. The
+// dense tracker hands its keyframes to `sink` when one is given (loop closure).
+std::unique_ptr<PoseProvider> makePoseProvider(const Config& config, KeyframeSink* sink = nullptr);
+
+// Whether makePoseProvider makes a tracker with keyframes a pose graph can be built on.
+bool tracksKeyframes(const Config& config);
 
 }  // namespace rgbdmap

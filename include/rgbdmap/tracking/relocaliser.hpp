@@ -10,8 +10,9 @@
 
 namespace rgbdmap {
 
-// What relocalisation keeps of a keyframe: its grey image and depth, and (computed the first time
-// they are needed, so that tracking pays nothing for them) ORB features with 3-D points.
+// What relocalisation keeps of a keyframe: its grey image and depth until ORB features with 3-D
+// points are computed from them (the first time they are needed, so that tracking pays nothing
+// for them; the images are let go then).
 struct RelocalisationView {
   cv::Mat gray;   // CV_8UC1
   cv::Mat depth;  // CV_32FC1, metres
@@ -28,12 +29,21 @@ class Relocaliser {
   void remember(const Frame& frame, RelocalisationView& view) const;
   // Describes the current image once per call of prepare(); then locate() against keyframes.
   void prepare(const Frame& frame);
+  // The prepared image's features with the 3-D points `depth` (of the same frame) gives them, as a
+  // keyframe view for later locate() calls: no second feature detection.
+  void describePrepared(const cv::Mat& depth, RelocalisationView& view) const;
+  // Ratio-test matches between a keyframe and the prepared image: how alike they look.
+  int similarity(RelocalisationView& keyframe);
   // The motion mapping keyframe-camera points into the current camera, when enough matches
-  // agree on one.
-  std::optional<Eigen::Isometry3d> locate(RelocalisationView& keyframe);
+  // agree on one (`inliers`, if given, receives the PnP inlier count).
+  std::optional<Eigen::Isometry3d> locate(RelocalisationView& keyframe, int* inliers = nullptr);
 
  private:
   void describe(RelocalisationView& view);
+  // Keeps the keypoints with a depth in range, as 3-D points with their descriptor rows.
+  void attachPoints(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& descriptors,
+                    const cv::Mat& depth, RelocalisationView& view) const;
+  void ratioMatches(const RelocalisationView& keyframe, std::vector<cv::DMatch>& matches);
 
   CameraIntrinsics camera_;
   int min_inliers_;

@@ -1,0 +1,49 @@
+#pragma once
+
+namespace rgbdmap {
+
+// The tunables of loop closure (config section "loop"): place recognition among earlier
+// keyframes, its geometric checks, the pose graph and the submaps the map is made of. They live
+// in base so that Config can hold them; the slam and mapping layers read them. Defaults are the
+// measured ones (docs/loop-closure.md).
+struct LoopOptions {
+  bool enabled = true;  // off: odometry only, one map in the odometry frame (as before loops)
+
+  // Candidates: earlier keyframes, not among the most recent ones (odometry links those), whose
+  // estimated pose is near the new keyframe's and looks the same way. The radius and the angle
+  // grow with the path walked between the two, as odometry drift does.
+  int recent_keyframes = 10;
+  double search_radius = 0.6;    // m
+  double max_view_angle = 0.70;  // rad between the optical axes
+  double drift_per_metre = 0.08;  // m (and rad) of allowance per metre walked between the two
+  int max_candidates = 3;         // the best-matching few are verified geometrically
+
+  // Geometric verification: ORB matches, then PnP RANSAC, then the dense aligner from the PnP
+  // pose; the two must agree, and the dense alignment must pass the tracker's checks.
+  int min_matches = 40;  // ratio-test ORB matches a candidate needs to be tried
+  int min_inliers = 35;  // PnP RANSAC inliers
+  double min_overlap = 0.35;
+  double max_disagreement_translation = 0.04;  // m between the PnP and the dense pose
+  double max_disagreement_rotation = 0.06;     // rad
+
+  // Consistency: a loop is accepted only when another one, found from a keyframe within
+  // `consistency_keyframes` of it, puts the newer keyframe at the same corrected pose.
+  int consistency_keyframes = 4;
+  double consistent_translation = 0.03;  // m
+  double consistent_rotation = 0.035;    // rad
+  // After optimising, a loop whose whitened residual stays above this is taken out again.
+  double max_loop_residual = 5.0;
+
+  // Each edge's information is the aligner's per-pixel information times this many pixels: the
+  // number of independent measurements an alignment is worth (neighbouring pixels are not
+  // independent, so far fewer than the pixels used).
+  double edge_pixels = 50.0;
+
+  // Submaps: the map is fused into a submap anchored to a tracking keyframe; a new one starts
+  // after this many fused keyframes or this far from where the submap started.
+  int submap_keyframes = 40;
+  double submap_distance = 0.5;  // m
+  double submap_rotation = 0.6;  // rad
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/slam/place_recognition.hpp"
+#include "rgbdmap/slam/pose_graph.hpp"
+#include "rgbdmap/tracking/keyframe_sink.hpp"
+#include "rgbdmap/tracking/pose_corrections.hpp"
+
+namespace rgbdmap {
+
+// Keeps the tracker's keyframes consistent over time, on its own thread: each keyframe becomes a
+// pose graph node tied to the keyframe it was tracked against; place recognition looks for an
+// earlier keyframe the camera is back at; a verified loop is accepted once a second one from a
+// nearby keyframe agrees with it (and it stays agreeable after optimising); then the graph is
+// optimised and the corrections published for the map and the trajectories. Tracking never
+// waits for it, except in a lossless replay when more than a few keyframes are queued (so that
+// a replay gives the same map every time).
+class LoopCloser : public KeyframeSink {
+ public:
+  // lossless: block addKeyframe() while the queue is full instead of skipping the search.
+  LoopCloser(const Config& config, PoseCorrections& corrections, RunStats& stats, bool lossless);
+  ~LoopCloser() override;
+
+  void addKeyframe(TrackedKeyframe keyframe) override;
+  // Processes every queued keyframe, then stops the thread. The corrections are final after it.
+  void finish();
+
+ private:
+  struct Node {
+    double timestamp = 0.0;
+    double walked = 0.0;  // metres along the odometry path from the first keyframe
+    Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();
+  };
+  struct Pending {  // a verified loop waiting for a second one to agree
+    LoopMeasurement loop;
+    bool accepted = false;
+  };
+
+  void run();
+  void process(TrackedKeyframe& keyframe);
+  std::vector<int> candidatesFor(int id) const;
+  // The pose of `later` the loop implies, with the graph's current estimate of `earlier`.
+  Eigen::Isometry3d impliedPose(const LoopMeasurement& loop) const;
+  bool plausible(const LoopMeasurement& loop) const;
+  bool agree(const LoopMeasurement& a, const LoopMeasurement& b) const;
+  void close(const std::vector<LoopMeasurement>& loops);
+  void publish();
+  PoseGraph::Edge edgeOf(int from, int to, const Eigen::Isometry3d& measurement,
+                         const Eigen::Matrix<double, 6, 6>& information, bool loop) const;
+
+  LoopOptions options_;
+  PoseCorrections& corrections_;
+  RunStats& stats_;
+  bool lossless_;
+  PlaceRecognition places_;
+  PoseGraph graph_;
+  std::vector<Node> nodes_;
+  std::deque<Pending> pending_;
+
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<TrackedKeyframe> queue_;
+  bool finishing_ = false;
+  std::thread thread_;
+};
+
+}  // namespace rgbdmap

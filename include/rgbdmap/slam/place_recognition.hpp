@@ -1,0 +1,64 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <vector>
+
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/tracking/dense_aligner.hpp"
+#include "rgbdmap/tracking/image_pyramid.hpp"
+#include "rgbdmap/tracking/keyframe_sink.hpp"
+#include "rgbdmap/tracking/relocaliser.hpp"
+
+namespace rgbdmap {
+
+// A loop found between an earlier keyframe and the newest one, verified geometrically.
+struct LoopMeasurement {
+  int earlier = 0, later = 0;  // keyframe ids
+  Eigen::Isometry3d later_in_earlier = Eigen::Isometry3d::Identity();  // X_earlier^-1 * X_later
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // per pixel
+  int matches = 0, inliers = 0;
+  double overlap = 0.0;
+};
+
+// Finds where the newest keyframe has been before: keeps each keyframe's appearance (ORB
+// features with 3-D points) and its dense alignment reference; among the earlier keyframes a
+// caller proposes (near it, by pose), the best-matching few are verified with PnP RANSAC and
+// then the dense aligner started from the PnP pose. Both must agree and the dense alignment must
+// pass the tracker's own plausibility checks: two independent methods rarely agree on a wrong
+// place.
+class PlaceRecognition {
+ public:
+  struct Counts {
+    int proposed = 0;  // looked alike (enough ORB matches)
+    int verified = 0;  // passed the geometric checks
+  };
+
+  explicit PlaceRecognition(const Config& config);
+
+  // Takes in the newest keyframe (its images are let go after this). Call before find().
+  void add(const TrackedKeyframe& keyframe);
+  // The best verified loop from the newest keyframe to one of `candidates` (ids, nearest
+  // first), or none.
+  std::optional<LoopMeasurement> find(const std::vector<int>& candidates, Counts& counts);
+  bool described(int id) const;
+  std::size_t memoryBytes() const;
+
+ private:
+  struct Entry {
+    bool described = false;
+    RelocalisationView view;
+    AlignmentReference reference;
+  };
+
+  CameraIntrinsics camera_;
+  TrackingOptions tracking_;
+  LoopOptions options_;
+  float min_depth_, max_depth_;
+  Relocaliser features_;
+  DenseAligner aligner_;
+  ImagePyramid pyramid_;  // of the newest keyframe
+  std::vector<Entry> entries_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,54 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+namespace rgbdmap {
+
+// Keyframe poses as nodes, measured relative motions as edges; optimised with Ceres
+// (Levenberg-Marquardt, sparse normal Cholesky). Node 0 is held fixed: it defines the world.
+// An edge's error is log(Z^-1 * X_from^-1 * X_to) with the rotation part approximated by twice
+// the vector part of the quaternion, [translation, rotation], whitened by the square root of
+// the edge's information.
+class PoseGraph {
+ public:
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  struct Edge {
+    int from = 0, to = 0;
+    Eigen::Isometry3d measurement = Eigen::Isometry3d::Identity();  // X_from^-1 * X_to
+    Matrix6d sqrt_information = Matrix6d::Identity();
+    bool loop = false;
+  };
+  struct Summary {
+    bool usable = false;  // the solver ended with a finite solution
+    int iterations = 0;
+    double seconds = 0.0;
+    double initial_cost = 0.0, final_cost = 0.0;
+  };
+
+  int addNode(const Eigen::Isometry3d& estimate);  // returns the node's index
+  void addEdge(const Edge& edge);
+  void removeLastEdges(std::size_t count);  // undoes the last `count` addEdge calls
+
+  Summary optimise(int max_iterations = 100);
+
+  int size() const { return static_cast<int>(nodes_.size()); }
+  Eigen::Isometry3d pose(int node) const;
+  const std::vector<Edge>& edges() const { return edges_; }
+  // |whitened error| of an edge at the current estimates.
+  double whitenedError(const Edge& edge) const;
+
+  // Square root of an information matrix (symmetrised, with a small floor on its eigenvalues
+  // so a direction the measurement says nothing about does not make the problem singular).
+  static Matrix6d sqrtInformation(const Matrix6d& information);
+
+ private:
+  struct Node {
+    double t[3];
+    double q[4];  // x y z w (Eigen's order)
+  };
+  std::vector<Node> nodes_;
+  std::vector<Edge> edges_;
+};
+
+}  // namespace rgbdmap

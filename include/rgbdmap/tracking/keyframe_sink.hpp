@@ -1,0 +1,34 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+namespace rgbdmap {
+
+// A tracking keyframe as the tracker made it: what a pose graph needs (its odometry pose and the
+// measured motion from the keyframe it was tracked against) and what place recognition needs
+// (its images).
+struct TrackedKeyframe {
+  std::uint64_t id = 0;  // 0, 1, 2, ... in the order made
+  double timestamp = 0.0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // odometry, camera-to-world
+  std::int64_t reference = -1;  // the keyframe it was tracked against; -1 for the first
+  // Its pose in the reference keyframe's camera, as the aligner measured it, and the information
+  // (inverse covariance) of that measurement per aligned pixel, for a perturbation
+  // [translation, rotation] applied on the right (in this keyframe's camera).
+  Eigen::Isometry3d from_reference = Eigen::Isometry3d::Identity();
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
+  cv::Mat color;  // CV_8UC3 BGR, full resolution; the receiver's own (never written again)
+  cv::Mat depth;  // CV_32FC1 metres
+};
+
+// Whoever wants the tracker's keyframes (the loop closer). Called on the tracking thread: an
+// implementation must return promptly.
+class KeyframeSink {
+ public:
+  virtual ~KeyframeSink() = default;
+  virtual void addKeyframe(TrackedKeyframe keyframe) = 0;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,257 @@
+#include "rgbdmap/slam/loop_closer.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace rgbdmap {
+namespace {
+
+// Keyframes that may wait for the loop thread. Each holds its full-resolution images (~2 MB).
+constexpr std::size_t kMaxQueued = 8;
+// Nearest candidates by pose that are compared by appearance, per keyframe.
+constexpr std::size_t kMaxCompared = 20;
+// A turn counts towards the path walked as this many metres per radian: odometry drifts while
+// the camera turns in place too.
+constexpr double kMetresPerRadian = 0.3;
+// Corrections a loop may make beyond its drift allowance (m, rad).
+constexpr double kBaseAllowance = 0.05;
+constexpr double kDegreesPerRadian = 57.29577951308232;
+
+double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(const Config& config, PoseCorrections& corrections, RunStats& stats,
+                       bool lossless)
+    : options_(config.loop),
+      corrections_(corrections),
+      stats_(stats),
+      lossless_(lossless),
+      places_(config),
+      thread_([this] { run(); }) {}
+
+LoopCloser::~LoopCloser() { finish(); }
+
+void LoopCloser::addKeyframe(TrackedKeyframe keyframe) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (lossless_) {
+    changed_.wait(lock, [&] { return queue_.size() < kMaxQueued; });
+  } else if (queue_.size() >= kMaxQueued) {
+    // Behind a live camera: the keyframe joins the graph but is not searched for loops.
+    keyframe.color.release();
+    keyframe.depth.release();
+    stats_.loop_keyframes_unsearched.fetch_add(1, std::memory_order_relaxed);
+  }
+  queue_.push_back(std::move(keyframe));
+  changed_.notify_all();
+}
+
+void LoopCloser::finish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finishing_ = true;
+  }
+  changed_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void LoopCloser::run() {
+  bool failed = false;
+  for (;;) {
+    TrackedKeyframe keyframe;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [&] { return !queue_.empty() || finishing_; });
+      if (queue_.empty()) break;
+      keyframe = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    changed_.notify_all();
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      process(keyframe);
+    } catch (const std::exception& e) {
+      // Loop closure is an improvement, never a reason to stop mapping: say it once, go on.
+      if (!failed) spdlog::error("loop closure: keyframe {}: {}", keyframe.id, e.what());
+      failed = true;
+    }
+    stats_.loop_latency.record(secondsSince(start));
+  }
+}
+
+PoseGraph::Edge LoopCloser::edgeOf(int from, int to, const Eigen::Isometry3d& measurement,
+                                   const Eigen::Matrix<double, 6, 6>& information,
+                                   bool loop) const {
+  PoseGraph::Edge edge;
+  edge.from = from;
+  edge.to = to;
+  edge.measurement = measurement;
+  edge.loop = loop;
+  if (information.allFinite() && information.trace() > 0.0) {
+    edge.sqrt_information = PoseGraph::sqrtInformation(information * options_.edge_pixels);
+  } else {
+    // No alignment behind it (a keyframe the tracker could not relate): a weak tie of 10 cm
+    // and 0.1 rad, so the graph stays connected without trusting it.
+    edge.sqrt_information = Eigen::Matrix<double, 6, 6>::Identity() * 10.0;
+  }
+  return edge;
+}
+
+void LoopCloser::process(TrackedKeyframe& keyframe) {
+  const int id = static_cast<int>(nodes_.size());
+  if (keyframe.id != static_cast<std::uint64_t>(id))
+    throw std::logic_error("keyframes out of order: got " + std::to_string(keyframe.id) +
+                           ", expected " + std::to_string(id));
+  Node node;
+  node.timestamp = keyframe.timestamp;
+  node.odometry = keyframe.pose;
+  if (id == 0) {
+    graph_.addNode(keyframe.pose);
+  } else {
+    // Tied to the keyframe it was tracked against; a keyframe without one (never, from the
+    // dense tracker) is tied to the previous keyframe by odometry, weakly.
+    int reference = static_cast<int>(keyframe.reference);
+    Eigen::Isometry3d from = keyframe.from_reference;
+    Eigen::Matrix<double, 6, 6> information = keyframe.information;
+    if (reference < 0 || reference >= id) {
+      reference = id - 1;
+      from = nodes_.back().odometry.inverse() * keyframe.pose;
+      information.setZero();
+    }
+    graph_.addNode(graph_.pose(reference) * from);
+    graph_.addEdge(edgeOf(reference, id, from, information, false));
+    node.walked = nodes_[static_cast<std::size_t>(reference)].walked +
+                  from.translation().norm() + kMetresPerRadian * angle(from);
+  }
+  nodes_.push_back(node);
+
+  places_.add(keyframe);
+  keyframe.color.release();
+  keyframe.depth.release();
+  std::vector<LoopMeasurement> accepted;
+  if (places_.described(id)) {
+    PlaceRecognition::Counts counts;
+    const std::optional<LoopMeasurement> loop = places_.find(candidatesFor(id), counts);
+    stats_.loop_candidates.fetch_add(static_cast<std::uint64_t>(counts.proposed));
+    stats_.loops_verified.fetch_add(static_cast<std::uint64_t>(counts.verified));
+    if (loop && !plausible(*loop)) {
+      stats_.loops_rejected.fetch_add(1);
+      spdlog::debug("loop {} -> {} rejected: a larger correction than drift explains",
+                    loop->later, loop->earlier);
+    } else if (loop) {
+      bool agreed = false;
+      for (Pending& p : pending_) {
+        if (p.loop.later >= loop->later || !agree(p.loop, *loop)) continue;
+        agreed = true;
+        if (!p.accepted) {
+          accepted.push_back(p.loop);
+          p.accepted = true;
+        }
+      }
+      if (agreed) accepted.push_back(*loop);
+      pending_.push_back({*loop, agreed});
+    }
+  }
+  // Loops that found no agreement within the window are dropped.
+  while (!pending_.empty() && pending_.front().loop.later < id - options_.consistency_keyframes) {
+    if (!pending_.front().accepted) stats_.loops_rejected.fetch_add(1);
+    pending_.pop_front();
+  }
+  if (!accepted.empty()) close(accepted);
+  publish();
+}
+
+std::vector<int> LoopCloser::candidatesFor(int id) const {
+  const Eigen::Isometry3d x = graph_.pose(id);
+  const Eigen::Vector3d axis = x.linear().col(2);
+  const double walked = nodes_[static_cast<std::size_t>(id)].walked;
+  std::vector<std::pair<double, int>> near;
+  for (int j = 0; j + options_.recent_keyframes < id; ++j) {
+    if (!places_.described(j)) continue;
+    const Eigen::Isometry3d xj = graph_.pose(j);
+    const double allowance =
+        options_.drift_per_metre * (walked - nodes_[static_cast<std::size_t>(j)].walked);
+    const double distance = (xj.translation() - x.translation()).norm();
+    if (distance > options_.search_radius + allowance) continue;
+    const double cosine = std::clamp(xj.linear().col(2).dot(axis), -1.0, 1.0);
+    if (std::acos(cosine) > options_.max_view_angle + allowance) continue;
+    near.emplace_back(distance, j);
+  }
+  std::sort(near.begin(), near.end());
+  if (near.size() > kMaxCompared) near.resize(kMaxCompared);
+  std::vector<int> ids;
+  for (const auto& n : near) ids.push_back(n.second);
+  return ids;
+}
+
+Eigen::Isometry3d LoopCloser::impliedPose(const LoopMeasurement& loop) const {
+  return graph_.pose(loop.earlier) * loop.later_in_earlier;
+}
+
+bool LoopCloser::plausible(const LoopMeasurement& loop) const {
+  const Eigen::Isometry3d correction = graph_.pose(loop.later).inverse() * impliedPose(loop);
+  const double walked = nodes_[static_cast<std::size_t>(loop.later)].walked -
+                        nodes_[static_cast<std::size_t>(loop.earlier)].walked;
+  const double allowance = kBaseAllowance + options_.drift_per_metre * walked;
+  return correction.translation().norm() <= allowance && angle(correction) <= allowance;
+}
+
+bool LoopCloser::agree(const LoopMeasurement& a, const LoopMeasurement& b) const {
+  if (b.later - a.later > options_.consistency_keyframes) return false;
+  // Where each loop would put keyframe b.later: a's correction (the rigid motion that moves
+  // a.later to where a says) applied to b.later's estimate, and b's own.
+  const Eigen::Isometry3d moved_by_a =
+      impliedPose(a) * graph_.pose(a.later).inverse() * graph_.pose(b.later);
+  const Eigen::Isometry3d difference = moved_by_a.inverse() * impliedPose(b);
+  return difference.translation().norm() <= options_.consistent_translation &&
+         angle(difference) <= options_.consistent_rotation;
+}
+
+void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
+  const PoseGraph before = graph_;
+  const Eigen::Isometry3d newest_before = graph_.pose(graph_.size() - 1);
+  for (const LoopMeasurement& loop : loops)
+    graph_.addEdge(edgeOf(loop.earlier, loop.later, loop.later_in_earlier, loop.information, true));
+  const PoseGraph::Summary summary = graph_.optimise();
+  stats_.optimise_latency.record(summary.seconds);
+  bool consistent = summary.usable;
+  double worst = 0.0;
+  for (std::size_t i = graph_.edges().size() - loops.size(); i < graph_.edges().size(); ++i)
+    worst = std::max(worst, graph_.whitenedError(graph_.edges()[i]));
+  consistent = consistent && worst <= options_.max_loop_residual;
+  if (!consistent) {
+    // The rest of the graph disagrees with these loops: not the same place after all.
+    graph_ = before;
+    stats_.loops_rejected.fetch_add(loops.size());
+    spdlog::debug("{} loop(s) at keyframe {} rejected after optimising (residual {:.2f})",
+                  loops.size(), loops.back().later, worst);
+    return;
+  }
+  stats_.loops_accepted.fetch_add(loops.size());
+  const Eigen::Isometry3d moved = newest_before.inverse() * graph_.pose(graph_.size() - 1);
+  const LoopMeasurement& last = loops.back();
+  spdlog::info(
+      "loop closed: keyframe {} is back at keyframe {} ({:.1f} s earlier); the camera's pose "
+      "moved {:.1f} cm, {:.1f} deg ({} keyframes optimised in {:.0f} ms)",
+      last.later, last.earlier,
+      nodes_[static_cast<std::size_t>(last.later)].timestamp -
+          nodes_[static_cast<std::size_t>(last.earlier)].timestamp,
+      100.0 * moved.translation().norm(), angle(moved) * kDegreesPerRadian, graph_.size(),
+      summary.seconds * 1e3);
+}
+
+void LoopCloser::publish() {
+  PoseCorrections::Table table(nodes_.size());
+  for (std::size_t i = 0; i < nodes_.size(); ++i)
+    table[i] = graph_.pose(static_cast<int>(i)) * nodes_[i].odometry.inverse();
+  corrections_.publish(std::move(table));
+}
+
+}  // namespace rgbdmap

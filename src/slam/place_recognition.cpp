@@ -1,0 +1,100 @@
+#include "rgbdmap/slam/place_recognition.hpp"
+
+#include <algorithm>
+
+namespace rgbdmap {
+namespace {
+
+double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+
+}  // namespace
+
+PlaceRecognition::PlaceRecognition(const Config& config)
+    : camera_(config.camera),
+      tracking_(config.tracking),
+      options_(config.loop),
+      min_depth_(static_cast<float>(config.min_depth)),
+      max_depth_(static_cast<float>(config.max_depth)),
+      features_(config.camera, config.loop.min_inliers, min_depth_, max_depth_),
+      aligner_(config.tracking) {}
+
+bool PlaceRecognition::described(int id) const {
+  return id >= 0 && id < static_cast<int>(entries_.size()) &&
+         entries_[static_cast<std::size_t>(id)].described;
+}
+
+void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
+  const auto id = static_cast<std::size_t>(keyframe.id);
+  if (entries_.size() <= id) entries_.resize(id + 1);
+  Entry& entry = entries_[id];
+  if (keyframe.color.empty() || keyframe.depth.empty()) return;  // nothing to recognise it by
+  Frame frame;
+  frame.color = keyframe.color;
+  frame.depth = keyframe.depth;
+  frame.timestamp = keyframe.timestamp;
+  pyramid_.build(frame, camera_, tracking_.coarsest_level + 1, tracking_.finest_level,
+                 tracking_.undistort, min_depth_, max_depth_);
+  entry.reference.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,
+                        static_cast<float>(tracking_.min_gradient));
+  features_.prepare(frame);
+  features_.describePrepared(keyframe.depth, entry.view);
+  entry.described = true;
+}
+
+std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& candidates,
+                                                      Counts& counts) {
+  if (entries_.empty() || !entries_.back().described) return std::nullopt;
+  const int newest = static_cast<int>(entries_.size()) - 1;
+  // Appearance first: how many distinctive ORB matches each candidate shares with the newest.
+  std::vector<std::pair<int, int>> ranked;  // (matches, id)
+  for (const int id : candidates) {
+    if (!described(id)) continue;
+    const int matches = features_.similarity(entries_[static_cast<std::size_t>(id)].view);
+    if (matches >= options_.min_matches) ranked.emplace_back(matches, id);
+  }
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (static_cast<int>(ranked.size()) > options_.max_candidates)
+    ranked.resize(static_cast<std::size_t>(options_.max_candidates));
+
+  for (const auto& [matches, id] : ranked) {
+    ++counts.proposed;
+    Entry& earlier = entries_[static_cast<std::size_t>(id)];
+    int inliers = 0;
+    const std::optional<Eigen::Isometry3d> found = features_.locate(earlier.view, &inliers);
+    if (!found) continue;
+    const AlignmentResult dense = aligner_.align(earlier.reference, pyramid_, *found);
+    if (!dense.finite || dense.overlap < options_.min_overlap ||
+        dense.intensity_sigma > tracking_.max_residual)
+      continue;
+    const Eigen::Isometry3d change = found->inverse() * dense.motion;
+    if (change.translation().norm() > options_.max_disagreement_translation ||
+        angle(change) > options_.max_disagreement_rotation)
+      continue;
+    ++counts.verified;
+    LoopMeasurement loop;
+    loop.earlier = id;
+    loop.later = newest;
+    Eigen::Isometry3d relative = dense.motion.inverse();
+    relative.linear() = Eigen::Quaterniond(relative.linear()).normalized().toRotationMatrix();
+    loop.later_in_earlier = relative;
+    loop.information = dense.information;
+    loop.matches = matches;
+    loop.inliers = inliers;
+    loop.overlap = dense.overlap;
+    return loop;
+  }
+  return std::nullopt;
+}
+
+std::size_t PlaceRecognition::memoryBytes() const {
+  std::size_t bytes = 0;
+  for (const Entry& e : entries_) {
+    bytes += e.view.descriptors.total() * e.view.descriptors.elemSize();
+    bytes += e.view.points.size() * sizeof(cv::Point3f);
+    for (const auto& level : e.reference.levels) bytes += level.points.size() * 16;
+  }
+  return bytes;
+}
+
+}  // namespace rgbdmap

@@ -1,0 +1,135 @@
+#include "rgbdmap/slam/pose_graph.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Eigenvalues>
+#include <chrono>
+#include <cmath>
+
+namespace rgbdmap {
+namespace {
+
+template <typename T>
+Eigen::Matrix<T, 6, 1> edgeError(const Eigen::Isometry3d& z, const T* ta, const T* qa, const T* tb,
+                                 const T* qb) {
+  const Eigen::Map<const Eigen::Matrix<T, 3, 1>> pa(ta), pb(tb);
+  const Eigen::Map<const Eigen::Quaternion<T>> Qa(qa), Qb(qb);
+  const Eigen::Quaternion<T> qa_inv = Qa.conjugate();
+  // The estimated relative pose, then the measurement's inverse applied to it.
+  const Eigen::Quaternion<T> q_ab = qa_inv * Qb;
+  const Eigen::Matrix<T, 3, 1> p_ab = qa_inv * (pb - pa);
+  const Eigen::Quaterniond qz(z.linear());
+  const Eigen::Quaternion<T> qz_inv = qz.conjugate().cast<T>();
+  const Eigen::Quaternion<T> dq = qz_inv * q_ab;
+  Eigen::Matrix<T, 6, 1> e;
+  e.template head<3>() = qz_inv * (p_ab - z.translation().cast<T>());
+  e.template tail<3>() = T(2.0) * dq.vec();
+  return e;
+}
+
+struct RelativePoseCost {
+  Eigen::Isometry3d measurement;
+  Eigen::Matrix<double, 6, 6> sqrt_information;
+
+  template <typename T>
+  bool operator()(const T* ta, const T* qa, const T* tb, const T* qb, T* residual) const {
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residual);
+    r = sqrt_information.cast<T>() * edgeError(measurement, ta, qa, tb, qb);
+    return true;
+  }
+};
+
+}  // namespace
+
+int PoseGraph::addNode(const Eigen::Isometry3d& estimate) {
+  Node n;
+  const Eigen::Quaterniond q(estimate.linear());
+  const Eigen::Vector3d t = estimate.translation();
+  for (int i = 0; i < 3; ++i) n.t[i] = t[i];
+  n.q[0] = q.x();
+  n.q[1] = q.y();
+  n.q[2] = q.z();
+  n.q[3] = q.w();
+  nodes_.push_back(n);
+  return size() - 1;
+}
+
+void PoseGraph::addEdge(const Edge& edge) { edges_.push_back(edge); }
+
+void PoseGraph::removeLastEdges(std::size_t count) {
+  edges_.resize(edges_.size() - std::min(count, edges_.size()));
+}
+
+Eigen::Isometry3d PoseGraph::pose(int node) const {
+  const Node& n = nodes_[static_cast<std::size_t>(node)];
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::Quaterniond(n.q[3], n.q[0], n.q[1], n.q[2]).normalized().toRotationMatrix();
+  out.translation() = Eigen::Vector3d(n.t[0], n.t[1], n.t[2]);
+  return out;
+}
+
+double PoseGraph::whitenedError(const Edge& edge) const {
+  const Node& a = nodes_[static_cast<std::size_t>(edge.from)];
+  const Node& b = nodes_[static_cast<std::size_t>(edge.to)];
+  return (edge.sqrt_information * edgeError(edge.measurement, a.t, a.q, b.t, b.q)).norm();
+}
+
+PoseGraph::Matrix6d PoseGraph::sqrtInformation(const Matrix6d& information) {
+  const Matrix6d symmetric = 0.5 * (information + information.transpose());
+  Eigen::SelfAdjointEigenSolver<Matrix6d> eig(symmetric);
+  Eigen::Matrix<double, 6, 1> values = eig.eigenvalues();
+  const double floor = std::max(1e-9, 1e-6 * values.maxCoeff());
+  for (int i = 0; i < 6; ++i) values[i] = std::sqrt(std::max(values[i], floor));
+  return values.asDiagonal() * eig.eigenvectors().transpose();
+}
+
+PoseGraph::Summary PoseGraph::optimise(int max_iterations) {
+  Summary out;
+  if (nodes_.size() < 2 || edges_.empty()) {
+    out.usable = true;
+    return out;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  ceres::EigenQuaternionManifold quaternion;
+  const std::vector<Node> before = nodes_;
+  for (const Edge& e : edges_) {
+    Node& a = nodes_[static_cast<std::size_t>(e.from)];
+    Node& b = nodes_[static_cast<std::size_t>(e.to)];
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
+        new RelativePoseCost{e.measurement, e.sqrt_information});
+    problem.AddResidualBlock(cost, nullptr, a.t, a.q, b.t, b.q);
+  }
+  for (Node& n : nodes_) {
+    if (problem.HasParameterBlock(n.q)) problem.SetManifold(n.q, &quaternion);
+  }
+  if (problem.HasParameterBlock(nodes_[0].t)) {
+    problem.SetParameterBlockConstant(nodes_[0].t);
+    problem.SetParameterBlockConstant(nodes_[0].q);
+  }
+
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = max_iterations;
+  options.num_threads = 1;  // its own thread already; tracking and fusion have the other core
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+
+  out.iterations = static_cast<int>(summary.iterations.size());
+  out.initial_cost = summary.initial_cost;
+  out.final_cost = summary.final_cost;
+  bool finite = std::isfinite(summary.final_cost);
+  for (const Node& n : nodes_)
+    for (double v : {n.t[0], n.t[1], n.t[2], n.q[0], n.q[1], n.q[2], n.q[3]})
+      finite = finite && std::isfinite(v);
+  out.usable = finite && summary.termination_type != ceres::FAILURE;
+  if (!out.usable) nodes_ = before;  // keep the last good estimates
+  out.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace rgbdmap
