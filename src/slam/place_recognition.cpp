@@ -7,16 +7,24 @@ namespace {
 
 double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
 
+// The tracker's alignment settings, made finer and geometric for loops (LoopOptions).
+TrackingOptions verificationOptions(const Config& config) {
+  TrackingOptions o = config.tracking;
+  o.finest_level = std::min(config.loop.finest_level, o.coarsest_level);
+  o.depth_weight = config.loop.depth_weight;
+  return o;
+}
+
 }  // namespace
 
 PlaceRecognition::PlaceRecognition(const Config& config)
     : camera_(config.camera),
-      tracking_(config.tracking),
+      tracking_(verificationOptions(config)),
       options_(config.loop),
       min_depth_(static_cast<float>(config.min_depth)),
       max_depth_(static_cast<float>(config.max_depth)),
       features_(config.camera, config.loop.min_inliers, min_depth_, max_depth_),
-      aligner_(config.tracking) {}
+      aligner_(tracking_) {}
 
 bool PlaceRecognition::described(int id) const {
   return id >= 0 && id < static_cast<int>(entries_.size()) &&

@@ -23,8 +23,12 @@ struct LoopOptions {
   int min_matches = 40;  // ratio-test ORB matches a candidate needs to be tried
   int min_inliers = 35;  // PnP RANSAC inliers
   double min_overlap = 0.35;
-  double max_disagreement_translation = 0.04;  // m between the PnP and the dense pose
-  double max_disagreement_rotation = 0.06;     // rad
+  // Pyramid level and depth weight of the dense check. Finer levels and depth residuals did not
+  // make loops on real frames (fr1/rpy) more accurate (docs/loop-closure.md); they cost memory.
+  int finest_level = 2;
+  double depth_weight = 0.0;
+  double max_disagreement_translation = 0.02;  // m between the PnP and the dense pose
+  double max_disagreement_rotation = 0.035;    // rad
 
   // Consistency: a loop is accepted only when another one, found from a keyframe within
   // `consistency_keyframes` of it, puts the newer keyframe at the same corrected pose.
