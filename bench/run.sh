@@ -5,10 +5,12 @@
 #   synth  a synthetic room with exact geometry (`rgbdmap synth`): the same three, plus F-score
 #          at 1 cm and mean distance from `rgbdmap evaluate map`
 #   long   a longer synthetic replay (~700 frames), mainly for peak memory
-# and a tracking table (no ground truth used): fr1/xyz, fr1/rpy and the synthetic room tracked
-# by rgbdmap end to end (pose.source=odometry, every frame in MAP_trajectory.txt) and, when
-# bench/track_sequence is built, by OpenCV's RgbdOdometry and RgbdICPOdometry frame to frame:
-# ATE, RPE, ms per frame, frames lost, and frames dropped replaying at the recorded rate.
+# and a tracking table (ground truth used only to score): fr1/xyz, fr1/rpy, the synthetic room
+# and a synthetic walk twice round an 8 x 6 m room with sensor errors that make odometry drift,
+# tracked by rgbdmap end to end (pose.source=odometry, every frame in MAP_trajectory.txt) with
+# loop closure and without it (loop.enabled=false), and, when bench/track_sequence is built, by
+# OpenCV's RgbdOdometry and RgbdICPOdometry frame to frame: ATE, RPE, loops closed, ms per
+# frame, frames lost, and frames dropped replaying at the recorded rate.
 # Machines are shared and noisy, so each system is also given as a ratio to the original method
 # measured in the same invocation; absolute times mean little on their own.
 #
@@ -32,6 +34,9 @@ usage: bash bench/run.sh [options]
   --micro           also run the Google Benchmark microbenchmarks and append their output
   --keep            keep the work folder (default: kept only when --work is given)
   --no-tracking     skip the tracking table
+  --tracking-only   only the tracking table (no mapping comparison, no Open3D)
+  --walk-frames N   frames of the synthetic walk with drift (default: 900, two laps; 0 skips it)
+  --sequence DIR    also track this TUM folder (repeatable), e.g. the whole fr1/rpy
 EOF
 }
 
@@ -47,6 +52,9 @@ every_n=10
 run_micro=0
 keep=0
 run_tracking=1
+run_mapping=1
+walk_frames=900
+extra_sequences=()
 invocation="$*"  # for the results file
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -60,11 +68,14 @@ while [ $# -gt 0 ]; do
     --micro) run_micro=1; shift ;;
     --keep) keep=1; shift ;;
     --no-tracking) run_tracking=0; shift ;;
+    --tracking-only) run_mapping=0; shift ;;
+    --walk-frames) walk_frames="$2"; shift 2 ;;
+    --sequence) extra_sequences+=("$2"); shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "run.sh: unknown option $1" >&2; usage >&2; exit 2 ;;
   esac
 done
-for n in "$synth_frames" "$long_frames" "$every_n" ${frames_limit:+"$frames_limit"}; do
+for n in "$synth_frames" "$long_frames" "$walk_frames" "$every_n" ${frames_limit:+"$frames_limit"}; do
   case "$n" in ''|*[!0-9]*) echo "run.sh: '$n' is not a whole number" >&2; exit 2 ;; esac
 done
 
@@ -277,6 +288,7 @@ run_open3d() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
 }
 
 run_scenario() {  # SCENARIO SEQUENCE EXACT_SCENE(or empty)
+  [ "$run_mapping" = 1 ] || return 0
   run_original "$1" "$2" "$3"
   run_rgbdmap "$1" "$2" "$every_n" "$3"
   run_rgbdmap "$1" "$2" 1 "$3"
@@ -323,7 +335,7 @@ if [ "$have_synth" = 1 ]; then
   n="$synth_frames"
   [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
   if make_synth "$work_dir/synth" "$n"; then run_scenario synth "$work_dir/synth" "$work_dir/synth"; fi
-  if [ "$long_frames" -gt 0 ]; then
+  if [ "$long_frames" -gt 0 ] && [ "$run_mapping" = 1 ]; then
     n="$long_frames"
     [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
     if make_synth "$work_dir/long" "$n"; then run_scenario long "$work_dir/long" "$work_dir/long"; fi
@@ -335,40 +347,51 @@ track_rows="$work_dir/track_rows.tsv"
 : >"$track_rows"
 cm() { awk -v m="$1" 'BEGIN { if (m == "") print "-"; else printf "%.2f", m * 100 }'; }
 
-# add_track_row SEQUENCE SYSTEM FRAMES ATE_CM RPE_CM RPE_DEG LOST MS_P50 MS_P95 DROPPED
+# add_track_row SEQUENCE SYSTEM FRAMES ATE_CM RPE_CM RPE_DEG LOST LOOPS MS_P50 MS_P95 DROPPED
 add_track_row() {
   local IFS=$'\t'
   echo "$*" >>"$track_rows"
 }
 
 track_scenario() {  # ID NAME FOLDER
-  local name="$2" seq="$3" base="$work_dir/track-$1"
-  echo "== tracking $name: rgbdmap, every frame (--rate max), then at the recorded rate" >&2
-  local ate="" rpe="" rpe_deg="" dropped="-"
-  if "$rgbdmap" --source "tum:$seq" --out "$base.pcd" --rate max -q --no-render \
-      --stats "$base.json" --set pose.source=odometry >"$base.log" 2>&1; then
-    if "$rgbdmap" evaluate trajectory --estimate "${base}_trajectory.txt" \
-        --groundtruth "$seq/groundtruth.txt" --json "$base-ate.json" >"$base-ate.log" 2>&1; then
-      ate=$(json_number "$base-ate.json" ate_rmse_m)
-      rpe=$(json_number "$base-ate.json" rpe_trans_rmse_m)
-      rpe_deg=$(json_number "$base-ate.json" rpe_rot_rmse_deg)
+  local name="$2" seq="$3" mode
+  for mode in loops odometry; do
+    local base="$work_dir/track-$1-$mode" label="rgbdmap, loop closure" loop_set=true
+    if [ "$mode" = odometry ]; then label="rgbdmap, odometry only"; loop_set=false; fi
+    echo "== tracking $name: $label, every frame (--rate max), then at the recorded rate" >&2
+    local ate="" rpe="" rpe_deg="" dropped="-"
+    if "$rgbdmap" --source "tum:$seq" --out "$base.pcd" --rate max -q --no-render \
+        --stats "$base.json" --set pose.source=odometry --set loop.enabled=$loop_set \
+        >"$base.log" 2>&1; then
+      if "$rgbdmap" evaluate trajectory --estimate "${base}_trajectory.txt" \
+          --groundtruth "$seq/groundtruth.txt" --json "$base-ate.json" >"$base-ate.log" 2>&1; then
+        ate=$(json_number "$base-ate.json" ate_rmse_m)
+        rpe=$(json_number "$base-ate.json" rpe_trans_rmse_m)
+        rpe_deg=$(json_number "$base-ate.json" rpe_rot_rmse_deg)
+      else
+        note "tracking $name: evaluate trajectory failed (see $base-ate.log)"
+      fi
     else
-      note "tracking $name: evaluate trajectory failed (see $base-ate.log)"
+      note "tracking $name ($label): rgbdmap failed (see $base.log)"
+      failures=$((failures + 1))
     fi
-  else
-    note "tracking $name: rgbdmap failed (see $base.log)"
-    failures=$((failures + 1))
-  fi
-  # As a live camera: the replay keeps the recorded pace and drops what the mapper cannot take.
-  if "$rgbdmap" --source "tum:$seq" --out "$base-rate1.pcd" --rate 1 -q --no-render \
-      --stats "$base-rate1.json" --set pose.source=odometry >"$base-rate1.log" 2>&1; then
-    dropped="$(json_number "$base-rate1.json" frames_dropped)/$(json_number "$base-rate1.json" frames_captured)"
-  else
-    note "tracking $name: rgbdmap --rate 1 failed (see $base-rate1.log)"
-  fi
-  add_track_row "$name" "rgbdmap (end to end)" "$(json_number "$base.json" frames_processed)" \
-    "$(cm "$ate")" "$(cm "$rpe")" "$(dash "$rpe_deg")" "$(json_number "$base.json" frames_lost)" \
-    "$(json_number "$base.json" p50_ms pose)" "$(json_number "$base.json" p95_ms pose)" "$dropped"
+    # As a live camera: the replay keeps the recorded pace and drops what the mapper cannot take.
+    if "$rgbdmap" --source "tum:$seq" --out "$base-rate1.pcd" --rate 1 -q --no-render \
+        --stats "$base-rate1.json" --set pose.source=odometry --set loop.enabled=$loop_set \
+        >"$base-rate1.log" 2>&1; then
+      dropped="$(json_number "$base-rate1.json" frames_dropped)/$(json_number "$base-rate1.json" frames_captured)"
+    else
+      note "tracking $name: rgbdmap --rate 1 ($label) failed (see $base-rate1.log)"
+    fi
+    local loops="-"
+    [ "$mode" = loops ] &&
+      loops="$(json_number "$base.json" loops_accepted)/$(json_number "$base.json" loop_candidates)"
+    add_track_row "$name" "$label" "$(json_number "$base.json" frames_processed)" \
+      "$(cm "$ate")" "$(cm "$rpe")" "$(dash "$rpe_deg")" "$(json_number "$base.json" frames_lost)" \
+      "$loops" "$(json_number "$base.json" p50_ms pose)" "$(json_number "$base.json" p95_ms pose)" \
+      "$dropped"
+  done
+  local base="$work_dir/track-$1"
 
   if [ ! -x "$track_sequence" ]; then return; fi
   echo "== tracking $name: OpenCV frame to frame (bench/track_sequence)" >&2
@@ -386,7 +409,7 @@ track_scenario() {  # ID NAME FOLDER
       "$(cm "$(json_number "$base-opencv.json" ate_rmse "$method")")" \
       "$(cm "$(json_number "$base-opencv.json" rpe_translation_rmse "$method")")" \
       "$(dash "$(json_number "$base-opencv.json" rpe_rotation_rmse "$method")")" \
-      "$(json_number "$base-opencv.json" lost "$method")" \
+      "$(json_number "$base-opencv.json" lost "$method")" "-" \
       "$(json_number "$base-opencv.json" median_ms "$method")" \
       "$(json_number "$base-opencv.json" p95_ms "$method")" "-"
   done
@@ -400,6 +423,31 @@ if [ "$run_tracking" = 1 ]; then
   [ -f "$xyz_seq/rgb.txt" ] && track_scenario xyz fr1/xyz "$xyz_seq"
   track_scenario rpy fr1/rpy "$tum_seq"
   [ -f "$work_dir/synth/rgb.txt" ] && track_scenario synth synth "$work_dir/synth"
+  # Twice round a larger room with a 1% depth-scale and focal-length error and drifting
+  # brightness: odometry drifts as a real camera's does, and the second lap revisits the first.
+  if [ "$walk_frames" -gt 0 ] && [ "$have_synth" = 1 ]; then
+    if "$rgbdmap" synth --help 2>/dev/null | grep -q -- "--path"; then
+      n="$walk_frames"
+      [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
+      echo "== generating a synthetic walk of $n frames" >&2
+      if "$rgbdmap" synth --out "$work_dir/walk" --frames "$n" --room 8x6x3 --path walk \
+          --loop-seconds 15 --depth-scale-error 0.01 --focal-error 0.01 --brightness-drift 0.15 \
+          >"$work_dir/walk.log" 2>&1; then
+        track_scenario walk "synthetic walk 8x6 m" "$work_dir/walk"
+      else
+        note "tracking: rgbdmap synth --path walk failed (see $work_dir/walk.log)"
+      fi
+    else
+      note "tracking: no synthetic walk: this rgbdmap synth has no --path"
+    fi
+  fi
+  for extra in ${extra_sequences[@]+"${extra_sequences[@]}"}; do
+    if [ -f "$extra/rgb.txt" ] && [ -f "$extra/groundtruth.txt" ]; then
+      track_scenario "extra-${extra##*/}" "${extra##*/}" "$extra"
+    else
+      note "tracking: $extra: not a TUM folder with rgb.txt and groundtruth.txt; skipped"
+    fi
+  done
   [ -x "$track_sequence" ] ||
     note "tracking: no OpenCV rows: $track_sequence is not built"
 fi
@@ -460,11 +508,11 @@ if [ -s "$track_rows" ]; then
   awk -F '\t' '
     { for (i = 1; i <= NF; ++i) cell[NR, i] = $i; n = NR }
     END {
-      header = "sequence|tracker|frames|ATE cm|RPE cm/s|RPE deg/s|lost|ms p50|ms p95|dropped at --rate 1"
+      header = "sequence|tracker|frames|ATE cm|RPE cm/s|RPE deg/s|lost|loops|ms p50|ms p95|dropped at --rate 1"
       cols = split(header, h, "|")
       for (c = 1; c <= cols; ++c) { cell[0, c] = h[c]; width[c] = length(h[c]) }
       for (r = 1; r <= n; ++r) {
-        for (c = 8; c <= 9; ++c) if (cell[r, c] ~ /^[0-9.]+$/) cell[r, c] = sprintf("%.1f", cell[r, c])
+        for (c = 9; c <= 10; ++c) if (cell[r, c] ~ /^[0-9.]+$/) cell[r, c] = sprintf("%.1f", cell[r, c])
         if (cell[r, 6] ~ /^[0-9.]+$/) cell[r, 6] = sprintf("%.2f", cell[r, 6])
         for (c = 1; c <= cols; ++c) {
           if (cell[r, c] == "") cell[r, c] = "-"
@@ -483,15 +531,15 @@ if [ -s "$track_rows" ]; then
     }' "$track_rows" >"$track_table"
 fi
 track_legend="Tracking: every frame of each sequence, ground truth used only to score. rgbdmap runs end to
-end (pose.source=odometry, fusion on, --rate max); ATE (after rigid alignment) and RPE over 1 s
-of MAP_trajectory.txt, which has every frame (a lost frame at its predicted pose); ms: tracking
+end (pose.source=odometry, fusion on, --rate max), with loop closure (the default) and without
+(loop.enabled=false); ATE (after rigid alignment) and RPE over 1 s of MAP_trajectory.txt, which
+has every frame (a lost frame at its predicted pose) with the pose graph's final corrections;
+loops: loops accepted / candidates verified geometrically; ms: tracking
 alone per frame (the stats' pose latency, decoding excluded); lost: frames tracking gave up on;
 dropped: frames dropped (of those read) replaying at the recorded rate (--rate 1), as a live
 camera. OpenCV rows: bench/track_sequence, frame to frame, same frames, same invocation."
 
-cat "$table"
-echo
-echo "$legend"
+if [ -s "$rows" ]; then cat "$table"; echo; echo "$legend"; fi
 if [ -s "$track_table" ]; then echo; cat "$track_table"; echo; echo "$track_legend"; fi
 if [ -s "$notes" ]; then echo; cat "$notes"; fi
 

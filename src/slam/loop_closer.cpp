@@ -19,6 +19,8 @@ constexpr double kMetresPerRadian = 0.3;
 // Corrections a loop may make beyond its drift allowance (m, rad).
 constexpr double kBaseAllowance = 0.05;
 constexpr double kDegreesPerRadian = 57.29577951308232;
+// A loop that moves the newest pose by this much (m, or rad) is worth a log line.
+constexpr double kNoticeableShift = 0.01;
 
 double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
 
@@ -237,14 +239,21 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   stats_.loops_accepted.fetch_add(loops.size());
   const Eigen::Isometry3d moved = newest_before.inverse() * graph_.pose(graph_.size() - 1);
   const LoopMeasurement& last = loops.back();
+  // While the camera goes over old ground every keyframe closes a loop; say so when a revisit
+  // starts or a loop moves the camera noticeably, and count the rest (stats, status line).
+  const bool revisit = last_closed_ < 0 || last.later - last_closed_ > options_.consistency_keyframes;
+  last_closed_ = last.later;
+  if (!revisit && moved.translation().norm() < kNoticeableShift &&
+      angle(moved) < kNoticeableShift)
+    return;
+  const Node& later = nodes_[static_cast<std::size_t>(last.later)];
+  const Node& earlier = nodes_[static_cast<std::size_t>(last.earlier)];
   spdlog::info(
-      "loop closed: keyframe {} is back at keyframe {} ({:.1f} s earlier); the camera's pose "
-      "moved {:.1f} cm, {:.1f} deg ({} keyframes optimised in {:.0f} ms)",
-      last.later, last.earlier,
-      nodes_[static_cast<std::size_t>(last.later)].timestamp -
-          nodes_[static_cast<std::size_t>(last.earlier)].timestamp,
-      100.0 * moved.translation().norm(), angle(moved) * kDegreesPerRadian, graph_.size(),
-      summary.seconds * 1e3);
+      "loop closed: keyframe {} (t {:.6f}) is back at keyframe {} (t {:.6f}, {:.1f} s earlier); "
+      "the camera's pose moved {:.1f} cm, {:.1f} deg ({} keyframes optimised in {:.0f} ms)",
+      last.later, later.timestamp, last.earlier, earlier.timestamp,
+      later.timestamp - earlier.timestamp, 100.0 * moved.translation().norm(),
+      angle(moved) * kDegreesPerRadian, graph_.size(), summary.seconds * 1e3);
 }
 
 void LoopCloser::publish() {

@@ -64,6 +64,7 @@ class LoopCloser : public KeyframeSink {
   PoseGraph graph_;
   std::vector<Node> nodes_;
   std::deque<Pending> pending_;
+  int last_closed_ = -1;  // the newest keyframe of the last loop closed
 
   std::mutex mutex_;
   std::condition_variable changed_;
