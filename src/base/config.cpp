@@ -182,6 +182,11 @@ std::vector<Config::Key> Config::keys() {
               "false: odometry only"),
       integer("loop.recent_keyframes", &loop.recent_keyframes, 1, 100000,
               "the most recent tracking keyframes are not loop candidates"),
+      number("loop.place_spacing", &loop.place_spacing, 0, 100,
+             "a keyframe is kept for later loops unless a kept one is this near (m) and turned "
+             "less than loop.place_spacing_angle"),
+      number("loop.place_spacing_angle", &loop.place_spacing_angle, 0, 3.15,
+             "see loop.place_spacing (rad; 0: keep every keyframe as a place)"),
       number("loop.search_radius", &loop.search_radius, 0, 100,
              "loop candidates lie this close to the keyframe's estimate (m), plus drift allowance"),
       number("loop.max_view_angle", &loop.max_view_angle, 0, 3.15,

@@ -35,8 +35,9 @@ void Mapper::closeSubmap() {
   if (active_keyframes_ > 0) {
     Submap submap;
     submap.anchor = active_anchor_;
-    map_.extract(submap.points);
-    submap.points.shrink_to_fit();
+    std::vector<VoxelMap::SurfacePoint> points;
+    map_.extract(points);
+    submap.points = SurfaceCloud(points);
     closed_points_ += submap.points.size();
     closed_.push_back(std::move(submap));
   }
@@ -67,7 +68,7 @@ std::shared_ptr<MapCloud> Mapper::snapshot() const {
     for (const Submap& submap : closed_) merger.add(submap.points, correction.of(submap.anchor));
     std::vector<VoxelMap::SurfacePoint> active;
     map_.extract(active);
-    merger.add(active, correction.of(active_anchor_));
+    merger.add(SurfaceCloud(active), correction.of(active_anchor_));
     merger.extract(*cloud);
   }
   stats_.map_points.store(cloud->size());  // what is written

@@ -19,19 +19,19 @@ bool keyOf(const Eigen::Vector3f& p, double voxel, std::uint64_t& key) {
 
 }  // namespace
 
-void PointMerger::add(const std::vector<VoxelMap::SurfacePoint>& points,
-                      const Eigen::Isometry3d& pose) {
+void PointMerger::add(const SurfaceCloud& points, const Eigen::Isometry3d& pose) {
   const Eigen::Isometry3f moved = pose.cast<float>();
-  for (const VoxelMap::SurfacePoint& point : points) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const VoxelMap::SurfacePoint point = points[i];
     const Eigen::Vector3f p = moved * point.position;
     std::uint64_t key;
     if (!keyOf(p, voxel_size_, key)) continue;
     const auto [it, inserted] = index_.try_emplace(key, static_cast<std::uint32_t>(sums_.size()));
     if (inserted) sums_.emplace_back();
     Sum& sum = sums_[it->second];
-    const double w = std::max(point.weight, 1e-6f);
-    sum.position += w * p.cast<double>();
-    sum.color += w * Eigen::Vector3d(point.r, point.g, point.b);
+    const float w = std::max(point.weight, 1e-6f);
+    sum.position += w * p;
+    sum.color += w * Eigen::Vector3f(point.r, point.g, point.b);
     sum.weight += w;
   }
 }
@@ -40,12 +40,12 @@ void PointMerger::extract(MapCloud& cloud) const {
   cloud.clear();
   cloud.reserve(sums_.size());
   for (const Sum& sum : sums_) {
-    const Eigen::Vector3d p = sum.position / sum.weight;
-    const Eigen::Vector3d c = sum.color / sum.weight;
+    const Eigen::Vector3f p = sum.position / sum.weight;
+    const Eigen::Vector3f c = sum.color / sum.weight;
     pcl::PointXYZRGB point;
-    point.x = static_cast<float>(p.x());
-    point.y = static_cast<float>(p.y());
-    point.z = static_cast<float>(p.z());
+    point.x = p.x();
+    point.y = p.y();
+    point.z = p.z();
     point.r = static_cast<std::uint8_t>(std::lround(c.x()));
     point.g = static_cast<std::uint8_t>(std::lround(c.y()));
     point.b = static_cast<std::uint8_t>(std::lround(c.z()));

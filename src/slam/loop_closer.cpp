@@ -61,7 +61,11 @@ void LoopCloser::finish() {
     finishing_ = true;
   }
   changed_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  if (!thread_.joinable()) return;
+  thread_.join();
+  spdlog::info("loop closure: {} keyframes, {} loops closed, {} rejected; place database {:.1f} MB",
+               nodes_.size(), stats_.loops_accepted.load(), stats_.loops_rejected.load(),
+               static_cast<double>(places_.memoryBytes()) / (1024.0 * 1024.0));
 }
 
 void LoopCloser::run() {
@@ -167,6 +171,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
     pending_.pop_front();
   }
   if (!accepted.empty()) close(accepted);
+  if (nearRememberedPlace(id)) places_.forget(id);
   publish();
 }
 
@@ -191,6 +196,18 @@ std::vector<int> LoopCloser::candidatesFor(int id) const {
   std::vector<int> ids;
   for (const auto& n : near) ids.push_back(n.second);
   return ids;
+}
+
+bool LoopCloser::nearRememberedPlace(int id) const {
+  const Eigen::Isometry3d x = graph_.pose(id);
+  for (int j = 0; j < id; ++j) {
+    if (!places_.described(j)) continue;
+    const Eigen::Isometry3d relative = graph_.pose(j).inverse() * x;
+    if (relative.translation().norm() < options_.place_spacing &&
+        angle(relative) < options_.place_spacing_angle)
+      return true;
+  }
+  return false;
 }
 
 Eigen::Isometry3d LoopCloser::impliedPose(const LoopMeasurement& loop) const {

@@ -31,6 +31,10 @@ bool PlaceRecognition::described(int id) const {
          entries_[static_cast<std::size_t>(id)].described;
 }
 
+void PlaceRecognition::forget(int id) {
+  if (described(id)) entries_[static_cast<std::size_t>(id)] = Entry{};
+}
+
 void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
   const auto id = static_cast<std::size_t>(keyframe.id);
   if (entries_.size() <= id) entries_.resize(id + 1);

@@ -17,6 +17,10 @@ struct LoopOptions {
   double max_view_angle = 0.70;  // rad between the optical axes
   double drift_per_metre = 0.08;  // m (and rad) of allowance per metre walked between the two
   int max_candidates = 3;         // the best-matching few are verified geometrically
+  // A keyframe is remembered as a place only if no remembered place is this close (m, rad):
+  // the database grows with the space explored, not with the time spent in it.
+  double place_spacing = 0.15;
+  double place_spacing_angle = 0.25;
 
   // Geometric verification: ORB matches, then PnP RANSAC, then the dense aligner from the PnP
   // pose; the two must agree, and the dense alignment must pass the tracker's checks.

@@ -8,6 +8,7 @@
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/surface_cloud.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 #include "rgbdmap/tracking/anchored_trajectory.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
@@ -38,7 +39,7 @@ class Mapper {
  private:
   struct Submap {
     std::int64_t anchor = -1;
-    std::vector<VoxelMap::SurfacePoint> points;  // in the odometry frame
+    SurfaceCloud points;  // in the odometry frame
   };
   bool startsSubmap(const Frame& keyframe) const;
   void closeSubmap();

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/surface_cloud.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
 namespace rgbdmap {
@@ -19,15 +20,15 @@ namespace rgbdmap {
 class PointMerger {
  public:
   explicit PointMerger(double voxel_size) : voxel_size_(voxel_size) {}
-  void add(const std::vector<VoxelMap::SurfacePoint>& points, const Eigen::Isometry3d& pose);
+  void add(const SurfaceCloud& points, const Eigen::Isometry3d& pose);
   void extract(MapCloud& cloud) const;
   std::size_t size() const { return sums_.size(); }
 
  private:
-  struct Sum {
-    Eigen::Vector3d position = Eigen::Vector3d::Zero();
-    Eigen::Vector3d color = Eigen::Vector3d::Zero();
-    double weight = 0.0;
+  struct Sum {  // floats: a merged map has as many of these as points
+    Eigen::Vector3f position = Eigen::Vector3f::Zero();
+    Eigen::Vector3f color = Eigen::Vector3f::Zero();
+    float weight = 0.0f;
   };
   double voxel_size_;
   tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> index_;

@@ -47,6 +47,8 @@ class LoopCloser : public KeyframeSink {
   void run();
   void process(TrackedKeyframe& keyframe);
   std::vector<int> candidatesFor(int id) const;
+  // Whether an earlier keyframe kept as a place is within loop.place_spacing of `id`.
+  bool nearRememberedPlace(int id) const;
   // The pose of `later` the loop implies, with the graph's current estimate of `earlier`.
   Eigen::Isometry3d impliedPose(const LoopMeasurement& loop) const;
   bool plausible(const LoopMeasurement& loop) const;

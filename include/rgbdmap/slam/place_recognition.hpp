@@ -42,6 +42,9 @@ class PlaceRecognition {
   // first), or none.
   std::optional<LoopMeasurement> find(const std::vector<int>& candidates, Counts& counts);
   bool described(int id) const;
+  // Lets a keyframe's appearance go (it stays a node of the graph, but no later keyframe can
+  // find it).
+  void forget(int id);
   std::size_t memoryBytes() const;
 
  private:
