@@ -57,13 +57,38 @@ void addSynthCommand(CLI::App& app, Command& selected) {
                   "radius of the camera's circle in metres (default: 16% of the room's length, "
                   "15% of its width)")
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--path", o->sequence.path,
+                  "camera path: orbit (a circle round the room's centre, looking out), walk "
+                  "(round the room along its walls, back to the start every lap: loops to "
+                  "close) or line (once along a wall, never back)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"orbit", "walk", "line"}));
+  cmd->add_option("--path-inset", o->sequence.path_inset,
+                  "walk, line: metres between the path and the walls (default: 20% of the "
+                  "room's width, 0.8 to 1.5 m)")
+      ->check(CLI::Range(0.0, 50.0));
+  cmd->add_option("--depth-scale-error", o->sequence.depth_scale_error,
+                  "sensor error: depth reads this fraction too far (0.01: 1% too far)")
+      ->capture_default_str()
+      ->check(CLI::Range(-0.19, 0.19));
+  cmd->add_option("--focal-error", o->sequence.focal_error,
+                  "sensor error: the lens' focal lengths are this fraction above the declared "
+                  "intrinsics (a miscalibrated camera)")
+      ->capture_default_str()
+      ->check(CLI::Range(-0.19, 0.19));
+  cmd->add_option("--brightness-drift", o->sequence.brightness_drift,
+                  "sensor error: the colour gain swings by +-this fraction every 6 s "
+                  "(auto-exposure)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.89));
   cmd->add_flag("--no-noise", o->no_noise,
                 "exact depth (only quantised to 1/depth_scale), no dropouts, no colour noise");
   cmd->add_option("--fps", o->sequence.fps, "frame rate (Hz)")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 1000.0));
   cmd->add_option("--loop-seconds", o->sequence.loop_seconds,
-                  "seconds for one circle of the room (smaller: faster camera)")
+                  "seconds for one circle (orbit) or lap (walk) of the room (smaller: faster "
+                  "camera)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   cmd->add_option("--dropout", o->sequence.dropout, "share of depth pixels missing at random")

@@ -5,6 +5,7 @@
 #include <tsl/hopscotch_map.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -43,6 +44,13 @@ void validate(const SyntheticSequenceOptions& o) {
   require(o.fps > 0.0 && o.fps <= 1000.0, "fps must be in (0, 1000]");
   require(o.loop_seconds > 0.0, "loop_seconds must be positive");
   require(o.path_radius >= 0.0, "path_radius must not be negative");
+  require(o.path == "orbit" || o.path == "walk" || o.path == "line",
+          "path '" + o.path + "' is unknown (expected orbit, walk or line)");
+  require(o.path_inset >= 0.0, "path_inset must not be negative");
+  require(std::abs(o.depth_scale_error) < 0.2, "depth_scale_error must be within +-0.2");
+  require(std::abs(o.focal_error) < 0.2, "focal_error must be within +-0.2");
+  require(o.brightness_drift >= 0.0 && o.brightness_drift < 0.9,
+          "brightness_drift must be in [0, 0.9)");
   require(o.depth_offset >= 0.0 && o.depth_offset_jitter >= 0.0 &&
               o.depth_offset + o.depth_offset_jitter < 0.019,
           "depth offset + jitter must stay below TUM's 0.02 s association window");
@@ -132,6 +140,11 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
   out << YAML::Key << "path_radius" << YAML::Value << o.path_radius;
   out << YAML::Key << "noise" << YAML::Value << o.noise;
   out << YAML::Key << "loop_seconds" << YAML::Value << o.loop_seconds;
+  out << YAML::Key << "path" << YAML::Value << o.path;
+  out << YAML::Key << "path_inset" << YAML::Value << o.path_inset;
+  out << YAML::Key << "depth_scale_error" << YAML::Value << o.depth_scale_error;
+  out << YAML::Key << "focal_error" << YAML::Value << o.focal_error;
+  out << YAML::Key << "brightness_drift" << YAML::Value << o.brightness_drift;
   out << YAML::Key << "camera" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "width" << YAML::Value << o.camera.width;
   out << YAML::Key << "height" << YAML::Value << o.camera.height;
@@ -158,47 +171,19 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
 
 double kinectDepthSigma(double z) { return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4); }
 
-HandheldPath::HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds,
-                           double radius)
-    : loop_seconds_(loop_seconds) {
+std::unique_ptr<CameraPath> makeCameraPath(const ScenePrimitive& room,
+                                           const SyntheticSequenceOptions& options,
+                                           double duration) {
   const Eigen::Vector3d size = room.max - room.min;
-  center_ = 0.5 * (room.min + room.max);
-  center_.z() = room.min.z() + 0.5 * size.z();
-  radius_ = radius > 0.0 ? Eigen::Vector2d(radius, radius)
-                         : Eigen::Vector2d(0.16 * size.x(), 0.15 * size.y());
-  std::mt19937_64 random(seed);
-  std::uniform_real_distribution<double> angle(0.0, 2.0 * M_PI);
-  for (double& p : phase_) p = angle(random);
-}
-
-Eigen::Isometry3d HandheldPath::pose(double t) const {
-  const double phi = 2.0 * M_PI * t / loop_seconds_;
-  // Slow circle plus a slow sway (a few cm) and a fast tremor (1 cm), as a hand holds a camera.
-  const Eigen::Vector3d position =
-      center_ +
-      Eigen::Vector3d(radius_.x() * std::cos(phi) + 0.05 * std::sin(2.3 * t + phase_[0]) +
-                          0.01 * std::sin(7.1 * t + phase_[1]),
-                      radius_.y() * std::sin(phi) + 0.05 * std::sin(1.9 * t + phase_[2]) +
-                          0.01 * std::sin(6.3 * t + phase_[3]),
-                      0.10 * std::sin(0.9 * t + phase_[4]) + 0.008 * std::sin(8.3 * t + phase_[5]));
-  // Look outwards, swinging +-17 degrees around the radial direction and 11-25 degrees down,
-  // so surfaces are seen from several positions and angles.
-  const double yaw = phi + 0.3 * std::sin(2.0 * M_PI * t / 4.1 + phase_[6]);
-  const double pitch = -0.32 + 0.12 * std::sin(2.0 * M_PI * t / 3.3 + phase_[7]);
-  const double roll = 0.05 * std::sin(1.3 * t + phase_[0] + phase_[3]);
-  const Eigen::Vector3d forward(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw),
-                                std::sin(pitch));
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d level_right = forward.cross(up).normalized();
-  const Eigen::Vector3d level_down = forward.cross(level_right);
-  const Eigen::Vector3d right = std::cos(roll) * level_right + std::sin(roll) * level_down;
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear().col(0) = right;
-  pose.linear().col(1) = down;
-  pose.linear().col(2) = forward;
-  pose.translation() = position;
-  return pose;
+  const double inset = options.path_inset > 0.0
+                           ? options.path_inset
+                           : std::clamp(0.2 * std::min(size.x(), size.y()), 0.8, 1.5);
+  if (options.path == "walk")
+    return std::make_unique<WalkPath>(room, options.seed, options.loop_seconds, inset);
+  if (options.path == "line")
+    return std::make_unique<LinePath>(room, options.seed, duration, inset);
+  return std::make_unique<HandheldPath>(room, options.seed, options.loop_seconds,
+                                        options.path_radius);
 }
 
 SyntheticRenderer::SyntheticRenderer(const SyntheticScene& scene, const CameraIntrinsics& camera)
@@ -270,17 +255,20 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     if (ec) throw InputError(folder + "/" + sub + ": cannot create folder (" + ec.message() + ")");
   }
 
-  const HandheldPath path(scene.room(), options.seed, options.loop_seconds, options.path_radius);
   const double duration = (options.frames - 1) / options.fps;
+  const std::unique_ptr<CameraPath> camera_path = makeCameraPath(scene.room(), options, duration);
+  const CameraPath& path = *camera_path;
   const int gt_margin = 5;  // samples of ground truth before the first and after the last frame
   const int gt_samples = static_cast<int>(std::ceil(duration * options.groundtruth_rate));
   for (int k = -gt_margin; k <= gt_samples + gt_margin; ++k) {
     const Eigen::Vector3d p = path.pose(k / options.groundtruth_rate).translation();
     if (!scene.isFreeSpace(p, options.camera_margin))
-      throw InputError("synthetic sequence: the camera path comes within " +
+      throw InputError("synthetic sequence: the " + options.path + " path comes within " +
                        std::to_string(options.camera_margin) +
                        " m of a surface at t = " + std::to_string(k / options.groundtruth_rate) +
-                       " s; the scene leaves too little free space around the room's centre");
+                       " s; the scene leaves too little free space " +
+                       (options.path == "orbit" ? "around the room's centre"
+                                                : "inside the walls (try another --path-inset)"));
   }
 
   std::ofstream groundtruth(folder + "/groundtruth.txt");
@@ -305,7 +293,11 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
              << " units per metre, 0 = no measurement\n# timestamp filename\n";
 
   const CameraIntrinsics& camera = options.camera;
-  const SyntheticRenderer renderer(scene, camera);
+  // The lens the images are rendered through; the sequence declares `camera`.
+  CameraIntrinsics lens = camera;
+  lens.fx *= 1.0 + options.focal_error;
+  lens.fy *= 1.0 + options.focal_error;
+  const SyntheticRenderer renderer(scene, lens);
   SurfaceSampler surface(options.surface_voxel);
   cv::Mat depth, color, incidence_cos, hits;
   cv::Mat depth16(camera.height, camera.width, CV_16UC1);
@@ -321,6 +313,8 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     const double depth_stamp =
         rgb_stamp + options.depth_offset + options.depth_offset_jitter * unit(stamp_random);
     renderer.render(path.pose(t), depth, color, incidence_cos, hits);
+    const double gain = 1.0 + options.brightness_drift * std::sin(2.0 * M_PI * t / 6.0);
+    if (gain != 1.0) color.convertTo(color, -1, gain);
 
     cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
       for (int v = rows.start; v < rows.end; ++v) {
@@ -338,7 +332,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
           const bool measurable =
               z >= options.min_range && z <= options.max_range && cos_row[u] >= min_cos;
           visible_row[u] = measurable ? 1 : 0;
-          double measured = measurable ? z : 0.0;
+          double measured = measurable ? z * (1.0 + options.depth_scale_error) : 0.0;
           if (options.noise) {
             // Draw every random number for every pixel so the stream does not depend on hits.
             const double n = gauss(random);

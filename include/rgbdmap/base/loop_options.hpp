@@ -19,8 +19,8 @@ struct LoopOptions {
   int max_candidates = 3;         // the best-matching few are verified geometrically
   // A keyframe is remembered as a place only if no remembered place is this close (m, rad):
   // the database grows with the space explored, not with the time spent in it.
-  double place_spacing = 0.15;
-  double place_spacing_angle = 0.25;
+  double place_spacing = 0.3;
+  double place_spacing_angle = 0.4;
 
   // Geometric verification: ORB matches, then PnP RANSAC, then the dense aligner from the PnP
   // pose; the two must agree, and the dense alignment must pass the tracker's checks.
@@ -50,8 +50,8 @@ struct LoopOptions {
   // Submaps: the map is fused into a submap anchored to a tracking keyframe; a new one starts
   // after this many fused keyframes or this far from where the submap started.
   int submap_keyframes = 40;
-  double submap_distance = 0.5;  // m
-  double submap_rotation = 0.6;  // rad
+  double submap_distance = 1.0;  // m
+  double submap_rotation = 1.0;  // rad
 };
 
 }  // namespace rgbdmap

@@ -2,10 +2,12 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/sim/camera_path.hpp"
 #include "rgbdmap/sim/synthetic_scene.hpp"
 
 namespace rgbdmap {
@@ -14,33 +16,25 @@ namespace rgbdmap {
 // and TUM simulations): sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres.
 double kinectDepthSigma(double z);
 
-// A smooth hand-held-like camera path through a room: the camera circles the room's centre at
-// about half its height, looking outwards with sinusoidal sway in yaw, pitch and roll, so each
-// surface is seen from several positions. Sums of sinusoids; the seed only shifts the phases of
-// the small perturbations, so every seed keeps well clear of the scene's surfaces.
-class HandheldPath {
- public:
-  // radius: of the circle (m, both axes); 0: 16% of the room's length and 15% of its width.
-  HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds,
-               double radius = 0.0);
-  // Camera-to-world pose (x right, y down, z forward) at t seconds after the start.
-  Eigen::Isometry3d pose(double t) const;
-
- private:
-  Eigen::Vector3d center_;
-  Eigen::Vector2d radius_;
-  double loop_seconds_;
-  double phase_[8];
-};
-
 struct SyntheticSequenceOptions {
   int frames = 300;
   double fps = 30.0;
   std::uint64_t seed = 1;        // the camera path's sway and the depth stamps
   std::uint64_t noise_seed = 1;  // the sensor noise: a second pass over a path with fresh noise
   bool noise = true;  // depth noise, dropouts and colour noise; false: exact depth (quantised)
-  double loop_seconds = 12.0;        // one circle of the room
+  // The camera's path: "orbit" (HandheldPath), "walk" (WalkPath: round the room along its
+  // walls, coming back every lap) or "line" (LinePath: once along a wall, never back).
+  std::string path = "orbit";
+  double loop_seconds = 12.0;        // one circle (orbit) or lap (walk) of the room
   double path_radius = 0.0;          // m: of the circle; 0: scaled to the room (HandheldPath)
+  double path_inset = 0.0;           // m from the walls (walk, line); 0: 20% of the room's width
+  // Sensor errors that make odometry drift as a real camera's does; 0: an ideal sensor. Depth
+  // is measured (1 + depth_scale_error) times too far; the lens' focal lengths are
+  // (1 + focal_error) times those declared (`camera`, what the mapper assumes); the colour
+  // gain drifts by +-brightness_drift (a slow auto-exposure, period 6 s).
+  double depth_scale_error = 0.0;
+  double focal_error = 0.0;
+  double brightness_drift = 0.0;
   double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
   // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
   // always inside the 0.02 s association window). Both images are rendered at the colour
@@ -84,8 +78,13 @@ class SyntheticRenderer {
   Eigen::Vector3d light_;              // a lamp under the ceiling, for view-independent shading
 };
 
+// The camera path `options` ask for through `room` (a sequence of `duration` seconds).
+std::unique_ptr<CameraPath> makeCameraPath(const ScenePrimitive& room,
+                                           const SyntheticSequenceOptions& options,
+                                           double duration);
+
 // Writes a TUM-layout sequence folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt,
-// scene.yaml, visible_surface.pcd) of `scene` seen along HandheldPath. Deterministic for a
+// scene.yaml, visible_surface.pcd) of `scene` seen along the options' camera path. Deterministic for a
 // seed. Throws InputError if the folder cannot be written or the path would leave free space.
 SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
                                                 const SyntheticScene& scene,

@@ -1,0 +1,74 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "rgbdmap/sim/synthetic_scene.hpp"
+
+namespace rgbdmap {
+
+// Where a synthetic camera is at time t: camera-to-world (x right, y down, z forward).
+class CameraPath {
+ public:
+  virtual ~CameraPath() = default;
+  virtual Eigen::Isometry3d pose(double t) const = 0;
+};
+
+// The camera at `position` looking along yaw (about +z, from +x) and pitch (up positive), then
+// rolled about its optical axis: a hand-held camera whose "up" stays near the world's +z.
+Eigen::Isometry3d handheldPose(const Eigen::Vector3d& position, double yaw, double pitch,
+                               double roll);
+
+// A slow circle round the room's centre at about half its height, looking outwards with
+// sinusoidal sway in yaw, pitch and roll, so each surface is seen from several positions. Sums of
+// sinusoids; the seed only shifts the phases of the small perturbations, so every seed keeps
+// well clear of the scene's surfaces.
+class HandheldPath : public CameraPath {
+ public:
+  // radius: of the circle (m, both axes); 0: 16% of the room's length and 15% of its width.
+  HandheldPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds,
+               double radius = 0.0);
+  Eigen::Isometry3d pose(double t) const override;
+
+ private:
+  Eigen::Vector3d center_;
+  Eigen::Vector2d radius_;
+  double loop_seconds_;
+  double phase_[8];
+};
+
+// A walk round the room along its walls: a rectangle `inset` metres inside the walls with
+// rounded corners, anticlockwise seen from above, one lap every `loop_seconds`, looking ahead
+// and out towards the near wall (as someone filming the walls of a room), with a hand's sway.
+// Each lap comes back to where the first began: the path for loop closure.
+class WalkPath : public CameraPath {
+ public:
+  WalkPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds, double inset);
+  Eigen::Isometry3d pose(double t) const override;
+  double lapLength() const { return lap_length_; }
+
+ private:
+  // Position and heading (rad) at arc length s along the lap.
+  void along(double s, Eigen::Vector2d& position, double& heading) const;
+
+  Eigen::Vector2d low_, high_;  // the rectangle the corners are rounded inside
+  double corner_radius_, height_, loop_seconds_, lap_length_;
+  double phase_[8];
+};
+
+// Once along one long wall, from one end to the other over `duration` seconds, filming it: a
+// path that never comes back anywhere it has been (no loop to close).
+class LinePath : public CameraPath {
+ public:
+  LinePath(const ScenePrimitive& room, std::uint64_t seed, double duration, double inset);
+  Eigen::Isometry3d pose(double t) const override;
+
+ private:
+  Eigen::Vector3d start_, end_;
+  double duration_;
+  double phase_[8];
+};
+
+}  // namespace rgbdmap
