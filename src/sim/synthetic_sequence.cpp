@@ -178,6 +178,16 @@ std::unique_ptr<CameraPath> makeCameraPath(const ScenePrimitive& room,
   const double inset = options.path_inset > 0.0
                            ? options.path_inset
                            : std::clamp(0.2 * std::min(size.x(), size.y()), 0.8, 1.5);
+  // A walk needs room for its rectangle, a line for its length.
+  const double free_x = size.x() - 2.0 * inset, free_y = size.y() - 2.0 * inset;
+  if (options.path != "orbit" && (free_x < 0.5 || (options.path == "walk" && free_y < 0.5))) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "synthetic sequence: a path inset of %.2f m leaves no room for the %s path in a "
+                  "%.1f x %.1f m room",
+                  inset, options.path.c_str(), size.x(), size.y());
+    throw InputError(text);
+  }
   if (options.path == "walk")
     return std::make_unique<WalkPath>(room, options.seed, options.loop_seconds, inset);
   if (options.path == "line")
