@@ -18,6 +18,10 @@ namespace {
 // 1.5 laps of the default 5 x 4 m room at 10 fps (a lap takes 16 s): 240 frames. Odometry ends
 // about 1 cm off (ATE), enough to leave every revisited wall doubled at 1 cm.
 const std::string kOrbit = " --frames 240 --fps 10 --loop-seconds 16";
+// 1.2 laps of a walk along the walls of a 6 x 5 m room (13 m a lap, 20 s) at 15 fps, with the
+// colour gain drifting by 15%: odometry ends 0.7 cm off (ATE).
+const std::string kWalk =
+    " --frames 360 --fps 15 --room 6x5x3 --path walk --loop-seconds 20 --brightness-drift 0.15";
 
 struct MappingRun {
   std::string stats, log;
@@ -64,24 +68,28 @@ MappingRun mapSequence(const std::string& sequence, const std::string& out, bool
   return run;
 }
 
-// One orbit sequence for the tests below, generated once into a shared folder (CTest runs each
-// test in its own process): written under a private name, then renamed into place.
+// A synthetic sequence generated once into a shared folder (CTest runs each test in its own
+// process): written under a private name, then renamed into place.
+std::string sharedSequence(const std::string& name, const std::string& synth_options) {
+  namespace fs = std::filesystem;
+  const std::string shared = std::string(RGBDMAP_TEST_TMP) + "/LoopSequences";
+  fs::create_directories(shared);
+  const std::string folder = shared + "/" + name;
+  if (!fs::exists(folder + "/visible_surface.pcd")) {
+    const std::string mine = folder + "." + std::to_string(::getpid());
+    std::string output;
+    EXPECT_EQ(test::run(test::binary() + " synth --out " + mine + synth_options, &output), 0)
+        << output;
+    std::error_code ec;
+    fs::rename(mine, folder, ec);
+    if (ec) fs::remove_all(mine);
+  }
+  return folder;
+}
+
 class Orbit : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    namespace fs = std::filesystem;
-    const std::string shared = std::string(RGBDMAP_TEST_TMP) + "/LoopOrbit";
-    fs::create_directories(shared);
-    if (!fs::exists(shared + "/orbit/visible_surface.pcd")) {
-      const std::string mine = shared + "/orbit." + std::to_string(::getpid());
-      std::string output;
-      ASSERT_EQ(test::run(test::binary() + " synth --out " + mine + kOrbit, &output), 0) << output;
-      std::error_code ec;
-      fs::rename(mine, shared + "/orbit", ec);
-      if (ec) fs::remove_all(mine);
-    }
-    sequence_ = new std::string(shared + "/orbit");
-  }
+  static void SetUpTestSuite() { sequence_ = new std::string(sharedSequence("orbit", kOrbit)); }
   static void TearDownTestSuite() {
     delete sequence_;
     sequence_ = nullptr;
@@ -89,6 +97,33 @@ class Orbit : public ::testing::Test {
   static std::string* sequence_;
 };
 std::string* Orbit::sequence_ = nullptr;
+
+// Every "loop closed" line of a log joins two moments at which the camera really was in the
+// same place (ground truth within 30 cm); returns how many lines there were.
+int checkReportedLoops(const std::string& log, const std::string& sequence) {
+  const Trajectory truth = Trajectory::load(sequence + "/groundtruth.txt");
+  int reported = 0;
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    // "loop closed: keyframe 49 (t 1700000015.400000) is back at keyframe 0 (t 1700000000.0, ..."
+    const std::size_t first = line.find("loop closed: keyframe ");
+    if (first == std::string::npos) continue;
+    const std::size_t t1 = line.find("(t ", first), t2 = line.find("(t ", t1 + 1);
+    if (t2 == std::string::npos) {
+      ADD_FAILURE() << line;
+      continue;
+    }
+    const auto later = truth.interpolate(std::stod(line.substr(t1 + 3)));
+    const auto earlier = truth.interpolate(std::stod(line.substr(t2 + 3)));
+    if (!later || !earlier) {
+      ADD_FAILURE() << line;
+      continue;
+    }
+    EXPECT_LT((later->translation() - earlier->translation()).norm(), 0.3) << line;
+    ++reported;
+  }
+  return reported;
+}
 
 TEST_F(Orbit, ClosingLoopsRemovesTheDriftAndTheDoubleWalls) {
   const std::string dir = test::freshDir();
@@ -115,22 +150,7 @@ TEST_F(Orbit, ClosingLoopsRemovesTheDriftAndTheDoubleWalls) {
   EXPECT_NE(off.log.find("loop closure: off"), std::string::npos);
 
   // Every loop reported joins two moments at which the camera really was in the same place.
-  const Trajectory truth = Trajectory::load(*sequence_ + "/groundtruth.txt");
-  int reported = 0;
-  std::istringstream log(on.log);
-  for (std::string line; std::getline(log, line);) {
-    // "loop closed: keyframe 49 (t 1700000015.400000) is back at keyframe 0 (t 1700000000.0, ..."
-    const std::size_t first = line.find("loop closed: keyframe ");
-    if (first == std::string::npos) continue;
-    const std::size_t t1 = line.find("(t ", first), t2 = line.find("(t ", t1 + 1);
-    ASSERT_NE(t2, std::string::npos) << line;
-    const auto later = truth.interpolate(std::stod(line.substr(t1 + 3)));
-    const auto earlier = truth.interpolate(std::stod(line.substr(t2 + 3)));
-    ASSERT_TRUE(later && earlier) << line;
-    EXPECT_LT((later->translation() - earlier->translation()).norm(), 0.3) << line;
-    ++reported;
-  }
-  EXPECT_GE(reported, 1) << on.log;
+  EXPECT_GE(checkReportedLoops(on.log, *sequence_), 1) << on.log;
 }
 
 TEST_F(Orbit, NoLoopBeforeTheCameraComesBack) {
@@ -151,6 +171,22 @@ TEST_F(Orbit, NoLoopBeforeTheCameraComesBack) {
   EXPECT_EQ(test::jsonNumber(run.stats, "frames_processed"), 100);
   EXPECT_EQ(test::jsonNumber(run.stats, "loops_accepted"), 0);
   EXPECT_EQ(run.log.find("loop closed"), std::string::npos);
+}
+
+TEST(Walk, ClosingLoopsRoundARoomKeepsEveryReportedLoopTrue) {
+  const std::string sequence = sharedSequence("walk", kWalk);
+  const std::string dir = test::freshDir();
+  const MappingRun on = mapSequence(sequence, dir + "/on", true);
+  const MappingRun off = mapSequence(sequence, dir + "/off", false);
+  // Measured: on ATE 0.23 cm, precision 0.9997, 33 loops; off ATE 0.70 cm, precision 0.9969.
+  EXPECT_GE(test::jsonNumber(on.stats, "loops_accepted"), 5);
+  EXPECT_EQ(test::jsonNumber(on.stats, "loops_rejected") + test::jsonNumber(on.stats, "frames_lost"),
+            0);
+  EXPECT_LT(on.ate_m, 0.005);
+  EXPECT_LT(on.ate_m, off.ate_m / 2);
+  EXPECT_GE(on.precision, 0.995);
+  EXPECT_GE(on.precision, off.precision);
+  EXPECT_GE(checkReportedLoops(on.log, sequence), 1) << on.log;
 }
 
 }  // namespace

@@ -205,6 +205,8 @@ std::vector<Config::Key> Config::keys() {
               "finest pyramid level of the dense loop check (0: full resolution)"),
       number("loop.depth_weight", &loop.depth_weight, 0, 100,
              "weight of the depth residual in the dense loop check"),
+      number("loop.max_distance", &loop.max_distance, 0, 100,
+             "a loop joins two keyframes at most this far apart, as measured (m)"),
       number("loop.max_disagreement_translation", &loop.max_disagreement_translation, 0, 10,
              "PnP and dense verification must agree within this (m)"),
       number("loop.max_disagreement_rotation", &loop.max_disagreement_rotation, 0, 3.15,

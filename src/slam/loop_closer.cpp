@@ -9,8 +9,9 @@
 namespace rgbdmap {
 namespace {
 
-// Keyframes that may wait for the loop thread. Each holds its full-resolution images (~2 MB).
-constexpr std::size_t kMaxQueued = 8;
+// Keyframes that may wait for the loop thread. Each holds its full-resolution images (~2 MB); the
+// thread takes 50 ms (p50) per keyframe and keyframes come every 150 ms or more, so a few do.
+constexpr std::size_t kMaxQueued = 4;
 // Nearest candidates by pose that are compared by appearance, per keyframe.
 constexpr std::size_t kMaxCompared = 20;
 // A turn counts towards the path walked as this many metres per radian: odometry drifts while

@@ -74,14 +74,17 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
     Entry& earlier = entries_[static_cast<std::size_t>(id)];
     int inliers = 0;
     const std::optional<Eigen::Isometry3d> found = features_.locate(earlier.view, &inliers);
-    if (!found) continue;
+    // Only places the camera has really been back to: two views of one wall from a metre apart
+    // are not a loop, even when they agree.
+    if (!found || found->translation().norm() > options_.max_distance) continue;
     const AlignmentResult dense = aligner_.align(earlier.reference, pyramid_, *found);
     if (!dense.finite || dense.overlap < options_.min_overlap ||
         dense.intensity_sigma > tracking_.max_residual)
       continue;
     const Eigen::Isometry3d change = found->inverse() * dense.motion;
     if (change.translation().norm() > options_.max_disagreement_translation ||
-        angle(change) > options_.max_disagreement_rotation)
+        angle(change) > options_.max_disagreement_rotation ||
+        dense.motion.translation().norm() > options_.max_distance)
       continue;
     ++counts.verified;
     LoopMeasurement loop;

@@ -31,6 +31,7 @@ struct LoopOptions {
   // make loops on real frames (fr1/rpy) more accurate (docs/loop-closure.md); they cost memory.
   int finest_level = 2;
   double depth_weight = 0.0;
+  double max_distance = 0.25;  // m: a loop joins keyframes at most this far apart (measured)
   double max_disagreement_translation = 0.02;  // m between the PnP and the dense pose
   double max_disagreement_rotation = 0.035;    // rad
 
