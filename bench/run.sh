@@ -87,7 +87,9 @@ rgbdmap="$build_dir/rgbdmap"
 original="$build_dir/bench/original_method"
 micro="$build_dir/bench/micro_benchmarks"
 track_sequence="$build_dir/bench/track_sequence"
-for exe in "$rgbdmap" "$original"; do
+required=("$rgbdmap")
+[ "$run_mapping" = 1 ] && required+=("$original")
+for exe in "${required[@]}"; do
   if [ ! -x "$exe" ]; then
     echo "run.sh: $exe not found; build first:" >&2
     echo "  cmake -S . -B ${build_dir#"$root"/} -DCMAKE_BUILD_TYPE=Release && cmake --build ${build_dir#"$root"/}" >&2

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/sim/camera_path.hpp"
@@ -80,12 +81,16 @@ std::string writeFrames(const std::string& folder, SyntheticSequenceOptions opti
   return folder;
 }
 
-cv::Mat readFirst(const std::string& folder, const std::string& list) {
+// The image of the first (or the last) line of a TUM list.
+cv::Mat readListed(const std::string& folder, const std::string& list, bool last = false) {
   const std::string text = test::readFile(folder + "/" + list);
-  std::size_t line = 0;
-  while (text[line] == '#') line = text.find('\n', line) + 1;
-  const std::size_t space = text.find(' ', line);
-  const std::string name = text.substr(space + 1, text.find('\n', space) - space - 1);
+  std::istringstream lines(text);
+  std::string name;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    name = line.substr(line.find(' ') + 1);
+    if (!last) break;
+  }
   return cv::imread(folder + "/" + name, cv::IMREAD_UNCHANGED);
 }
 
@@ -93,12 +98,12 @@ TEST(SensorErrors, DepthScaleAndFocalLengthChangeTheImagesAsDeclared) {
   const std::string dir = test::freshDir();
   SyntheticSequenceOptions options;
   options.frames = 1;
-  const cv::Mat exact = readFirst(writeFrames(dir + "/exact", options), "depth.txt");
+  const cv::Mat exact = readListed(writeFrames(dir + "/exact", options), "depth.txt");
   options.depth_scale_error = 0.05;
-  const cv::Mat far = readFirst(writeFrames(dir + "/far", options), "depth.txt");
+  const cv::Mat far = readListed(writeFrames(dir + "/far", options), "depth.txt");
   options.depth_scale_error = 0.0;
   options.focal_error = 0.1;
-  const cv::Mat zoomed = readFirst(writeFrames(dir + "/zoomed", options), "depth.txt");
+  const cv::Mat zoomed = readListed(writeFrames(dir + "/zoomed", options), "depth.txt");
   ASSERT_FALSE(exact.empty());
   ASSERT_EQ(exact.type(), CV_16UC1);
 
@@ -123,20 +128,15 @@ TEST(SensorErrors, BrightnessDriftsWithTheDeclaredGain) {
   const std::string dir = test::freshDir();
   SyntheticSequenceOptions options;
   options.frames = 2;
-  const cv::Mat exact = readFirst(writeFrames(dir + "/exact", options), "rgb.txt");
+  const cv::Mat exact = readListed(writeFrames(dir + "/exact", options), "rgb.txt");
   options.brightness_drift = 0.2;
-  const cv::Mat first = readFirst(writeFrames(dir + "/drift", options), "rgb.txt");
+  const cv::Mat first = readListed(writeFrames(dir + "/drift", options), "rgb.txt");
   // The first frame is at t = 0, where the gain is 1; so it must be the same image.
   ASSERT_FALSE(exact.empty());
   EXPECT_EQ(cv::norm(exact, first, cv::NORM_INF), 0.0);
   // The second frame, at t = 1 s, is 1 + 0.2 sin(2 pi / 6) = 1.173 times brighter.
-  const std::string text = test::readFile(dir + "/drift/rgb.txt");
-  const std::size_t last = text.rfind("rgb/");
-  const cv::Mat second = cv::imread(dir + "/drift/" + text.substr(last, text.find('\n', last) - last));
-  const std::string plain = test::readFile(dir + "/exact/rgb.txt");
-  const std::size_t plain_last = plain.rfind("rgb/");
-  const cv::Mat reference =
-      cv::imread(dir + "/exact/" + plain.substr(plain_last, plain.find('\n', plain_last) - plain_last));
+  const cv::Mat second = readListed(dir + "/drift", "rgb.txt", true);
+  const cv::Mat reference = readListed(dir + "/exact", "rgb.txt", true);
   ASSERT_FALSE(second.empty());
   ASSERT_FALSE(reference.empty());
   const double ratio = cv::mean(second)[1] / cv::mean(reference)[1];
