@@ -390,7 +390,8 @@ track_scenario() {  # ID NAME FOLDER
       loops="$(json_number "$base.json" loops_accepted)/$(json_number "$base.json" loop_candidates)"
     add_track_row "$name" "$label" "$(json_number "$base.json" frames_processed)" \
       "$(cm "$ate")" "$(cm "$rpe")" "$(dash "$rpe_deg")" "$(json_number "$base.json" frames_lost)" \
-      "$loops" "$(json_number "$base.json" p50_ms pose)" "$(json_number "$base.json" p95_ms pose)" \
+      "$loops" "$(json_number "$base-rate1.json" p50_ms pose)" \
+      "$(json_number "$base-rate1.json" p95_ms pose)" \
       "$dropped"
   done
   local base="$work_dir/track-$1"
@@ -535,8 +536,9 @@ track_legend="Tracking: every frame of each sequence, ground truth used only to 
 end (pose.source=odometry, fusion on, --rate max), with loop closure (the default) and without
 (loop.enabled=false); ATE (after rigid alignment) and RPE over 1 s of MAP_trajectory.txt, which
 has every frame (a lost frame at its predicted pose) with the pose graph's final corrections;
-loops: loops accepted / candidates verified geometrically; ms: tracking
-alone per frame (the stats' pose latency, decoding excluded); lost: frames tracking gave up on;
+loops: loops accepted / candidates tried geometrically (PnP, dense check); ms: tracking alone
+per frame at the recorded rate (--rate 1, the stats' pose latency, decoding excluded; OpenCV
+rows: every frame in a row); lost: frames tracking gave up on;
 dropped: frames dropped (of those read) replaying at the recorded rate (--rate 1), as a live
 camera. OpenCV rows: bench/track_sequence, frame to frame, same frames, same invocation."
 
@@ -559,7 +561,7 @@ fi
 
 if [ -n "$out_file" ]; then
   {
-    echo "# rgbdmap vs the original method"
+    if [ "$run_mapping" = 1 ]; then echo "# rgbdmap vs the original method"; else echo "# rgbdmap tracking, with and without loop closure"; fi
     echo
     echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
     echo "- host: $(uname -n), $(getconf _NPROCESSORS_ONLN 2>/dev/null || echo '?') cores, $(uname -sr)"
@@ -569,11 +571,9 @@ if [ -n "$out_file" ]; then
     echo "- commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$("${local_changes[@]}" 2>/dev/null || echo ' (with uncommitted changes)')"
     echo "- command: bash bench/run.sh $invocation"
     echo
-    echo '```'
-    cat "$table"
-    echo '```'
-    echo
-    echo "$legend"
+    if [ -s "$rows" ]; then
+      echo '```'; cat "$table"; echo '```'; echo; echo "$legend"
+    fi
     if [ -s "$track_table" ]; then
       echo; echo "## Tracking"; echo; echo '```'; cat "$track_table"; echo '```'; echo; echo "$track_legend"
     fi

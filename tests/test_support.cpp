@@ -145,6 +145,26 @@ std::string readFile(const std::string& path) {
   return s.str();
 }
 
+std::string sharedSynthetic(const std::string& name, const std::string& synth_options) {
+  namespace fs = std::filesystem;
+  const std::string folder = std::string(RGBDMAP_TEST_TMP) + "/synthetic/" + name;
+  if (fs::exists(folder + "/visible_surface.pcd")) return folder;
+  fs::create_directories(fs::path(folder).parent_path());
+  // Written under a private name and renamed into place when complete: CTest runs tests in
+  // parallel processes, and the loser of a race discards its copy.
+  const std::string mine = folder + "." + std::to_string(::getpid());
+  std::string output;
+  if (run(binary() + " synth --out " + mine + synth_options, &output) != 0) {
+    ADD_FAILURE() << "rgbdmap synth" << synth_options << " failed:\n" << output;
+    fs::remove_all(mine);
+    return folder;
+  }
+  std::error_code ec;
+  fs::rename(mine, folder, ec);
+  if (ec) fs::remove_all(mine);
+  return folder;
+}
+
 std::string copySequence(const std::string& source, const std::string& target) {
   namespace fs = std::filesystem;
   fs::create_directories(target);

@@ -51,6 +51,9 @@ bool waitUntil(const std::function<bool()>& condition, double timeout_s = 120.0)
 // A number from flat JSON ("key": value, as --stats and `evaluate --json` write); a test failure
 // and NaN when the key is missing.
 double jsonNumber(const std::string& json, const std::string& key);
+// A `rgbdmap synth` sequence written once per build into <build>/tests/tmp/synthetic/<name>
+// and shared by the tests (and processes) that ask for it by the same name and options.
+std::string sharedSynthetic(const std::string& name, const std::string& synth_options);
 // Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
 std::string copySequence(const std::string& source, const std::string& target);
 

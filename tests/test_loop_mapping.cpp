@@ -1,8 +1,8 @@
 // Loop closure end to end through the real binary: a synthetic camera goes round a room one and a
 // half times; odometry alone drifts, with loop closure the second lap is pulled onto the first.
-// Scored against the exact geometry and the ground truth `rgbdmap synth` writes.
+// Scored against the exact geometry and the ground truth `rgbdmap synth` writes. (The loop
+// thread under ThreadSanitizer: test_pipeline_loop_thread.cpp, on a shorter sequence.)
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -68,28 +68,9 @@ MappingRun mapSequence(const std::string& sequence, const std::string& out, bool
   return run;
 }
 
-// A synthetic sequence generated once into a shared folder (CTest runs each test in its own
-// process): written under a private name, then renamed into place.
-std::string sharedSequence(const std::string& name, const std::string& synth_options) {
-  namespace fs = std::filesystem;
-  const std::string shared = std::string(RGBDMAP_TEST_TMP) + "/LoopSequences";
-  fs::create_directories(shared);
-  const std::string folder = shared + "/" + name;
-  if (!fs::exists(folder + "/visible_surface.pcd")) {
-    const std::string mine = folder + "." + std::to_string(::getpid());
-    std::string output;
-    EXPECT_EQ(test::run(test::binary() + " synth --out " + mine + synth_options, &output), 0)
-        << output;
-    std::error_code ec;
-    fs::rename(mine, folder, ec);
-    if (ec) fs::remove_all(mine);
-  }
-  return folder;
-}
-
 class Orbit : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { sequence_ = new std::string(sharedSequence("orbit", kOrbit)); }
+  static void SetUpTestSuite() { sequence_ = new std::string(test::sharedSynthetic("orbit", kOrbit)); }
   static void TearDownTestSuite() {
     delete sequence_;
     sequence_ = nullptr;
@@ -174,7 +155,7 @@ TEST_F(Orbit, NoLoopBeforeTheCameraComesBack) {
 }
 
 TEST(Walk, ClosingLoopsRoundARoomKeepsEveryReportedLoopTrue) {
-  const std::string sequence = sharedSequence("walk", kWalk);
+  const std::string sequence = test::sharedSynthetic("walk", kWalk);
   const std::string dir = test::freshDir();
   const MappingRun on = mapSequence(sequence, dir + "/on", true);
   const MappingRun off = mapSequence(sequence, dir + "/off", false);
