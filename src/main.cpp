@@ -129,7 +129,25 @@ struct MapOptions {
   bool no_render = false;
   bool quiet = false;
   bool list_keys = false;
+  bool markdown = false;
 };
+
+// Every config key as a Markdown table: docs/configuration.md is this output, so the reference
+// cannot drift from the code (a test compares them).
+std::string configurationTable(rgbdmap::Config& config) {
+  auto escape = [](std::string text) {
+    for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2))
+      text.replace(at, 1, "\\|");
+    return text;
+  };
+  std::string table = "| key | default | meaning |\n| --- | --- | --- |\n";
+  for (const rgbdmap::Config::Key& k : config.keys()) {
+    const std::string value = k.get();
+    table += "| `" + k.name + "` | " + (value.empty() ? "" : "`" + escape(value) + "`") + " | " +
+             escape(k.help) + " |\n";
+  }
+  return table;
+}
 
 // The map's folder is created if missing and must be writable: better to refuse at once than to
 // find out at the first checkpoint, after mapping for a while.
@@ -157,6 +175,10 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
+    if (o.markdown) {
+      std::printf("%s", configurationTable(config).c_str());
+      return 0;
+    }
     for (const Config::Key& k : config.keys())
       std::printf("%-28s %-12s %s\n", k.name.c_str(), k.get().c_str(), k.help.c_str());
     return 0;
@@ -249,6 +271,8 @@ int main(int argc, char** argv) {
   app.add_flag("--no-render", o.no_render, "do not write a picture of the map");
   app.add_flag("-q,--quiet", o.quiet, "no status line");
   app.add_flag("--list-keys", o.list_keys, "list every config key with its default and meaning");
+  app.add_flag("--markdown", o.markdown,
+               "with --list-keys: as the Markdown table of docs/configuration.md");
 
   rgbdmap::Command selected;
   rgbdmap::addRenderCommand(app, selected);
