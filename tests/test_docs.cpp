@@ -31,7 +31,8 @@ TEST(Docs, ConfigurationReferenceIsTheBinarysOwnTable) {
   ASSERT_NE(to, std::string::npos);
   const std::size_t start = doc.find('\n', from) + 1;
   EXPECT_EQ(doc.substr(start, to - start), table)
-      << "docs/configuration.md is out of date: run bash scripts/update-docs.sh";
+      << "docs/configuration.md is out of date: cmake --build build --target rgbdmap && "
+         "bash scripts/update-docs.sh build";
   // Every key is in it.
   EXPECT_NE(table.find("| `loop.enabled` |"), std::string::npos);
   EXPECT_NE(table.find("| `map.voxel_size` |"), std::string::npos);
@@ -110,6 +111,17 @@ TEST(Docs, EveryRelativeLinkPointsAtAFile) {
     }
   }
   EXPECT_GT(links, 15);
+}
+
+TEST(Docs, EveryPageIsLinkedFromTheReadme) {
+  std::set<std::string> linked;
+  for (const Link& link : relativeLinks(test::readFile(kSource + "/README.md")))
+    linked.insert(fs::path(link.file).lexically_normal().string());
+  for (const auto& entry : fs::directory_iterator(fs::path(kSource) / "docs")) {
+    if (entry.path().extension() != ".md") continue;
+    const std::string page = "docs/" + entry.path().filename().string();
+    EXPECT_EQ(linked.count(page), 1u) << page << " is not in the README's table of docs";
+  }
 }
 
 TEST(Docs, TheReadmeStaysShort) {
