@@ -270,9 +270,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--no-render", o.no_render, "do not write a picture of the map");
   app.add_flag("-q,--quiet", o.quiet, "no status line");
-  app.add_flag("--list-keys", o.list_keys, "list every config key with its default and meaning");
+  CLI::Option* list_keys = app.add_flag("--list-keys", o.list_keys,
+                                        "list every config key with its default and meaning");
   app.add_flag("--markdown", o.markdown,
-               "with --list-keys: as the Markdown table of docs/configuration.md");
+               "with --list-keys: as the Markdown table of docs/configuration.md")
+      ->needs(list_keys);
 
   rgbdmap::Command selected;
   rgbdmap::addRenderCommand(app, selected);

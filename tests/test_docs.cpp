@@ -1,8 +1,14 @@
 // The documentation cannot drift from the code: the configuration reference is the binary's own
-// table, and every relative link in README.md and docs/ points at a file that exists.
+// table, and every relative link in README.md and docs/ points at a file that exists (and at a
+// heading of it when the link has an #anchor).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
+#include <map>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -25,26 +31,61 @@ TEST(Docs, ConfigurationReferenceIsTheBinarysOwnTable) {
   ASSERT_NE(to, std::string::npos);
   const std::size_t start = doc.find('\n', from) + 1;
   EXPECT_EQ(doc.substr(start, to - start), table)
-      << "docs/configuration.md is out of date: run bash scripts/update-docs.sh";
+      << "docs/configuration.md is out of date: cmake --build build --target rgbdmap && "
+         "bash scripts/update-docs.sh build";
   // Every key is in it.
   EXPECT_NE(table.find("| `loop.enabled` |"), std::string::npos);
   EXPECT_NE(table.find("| `map.voxel_size` |"), std::string::npos);
 }
 
-// The targets of Markdown links `[text](target)` in `text`, anchors and query parts removed.
-std::vector<std::string> linkTargets(const std::string& text) {
-  std::vector<std::string> targets;
+struct Link {
+  std::string file;    // relative path, empty for the page itself
+  std::string anchor;  // after '#', empty if none
+};
+
+// The links `[text](target)` of a Markdown page that point into the repository (no URL scheme),
+// query parts removed.
+std::vector<Link> relativeLinks(const std::string& text) {
+  std::vector<Link> links;
   for (std::size_t at = text.find("]("); at != std::string::npos; at = text.find("](", at + 2)) {
     const std::size_t close = text.find(')', at + 2);
     if (close == std::string::npos) break;
-    std::string target = text.substr(at + 2, close - at - 2);
-    target = target.substr(0, target.find('#'));
+    const std::string target = text.substr(at + 2, close - at - 2);
     if (target.empty() || target.find("://") != std::string::npos ||
         target.rfind("mailto:", 0) == 0 || target.find(' ') != std::string::npos)
       continue;
-    targets.push_back(target);
+    const std::size_t hash = target.find('#');
+    Link link{target.substr(0, std::min(hash, target.find('?'))), ""};
+    if (hash != std::string::npos) link.anchor = target.substr(hash + 1);
+    links.push_back(link);
   }
-  return targets;
+  return links;
+}
+
+// The anchors GitHub gives a Markdown page's headings: lower case, punctuation dropped, spaces
+// as hyphens, a repeated heading suffixed -1, -2, ... Lines in ``` fences are not headings.
+std::set<std::string> headingAnchors(const std::string& text) {
+  std::set<std::string> anchors;
+  std::map<std::string, int> seen;
+  std::istringstream lines(text);
+  bool fenced = false;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("```", 0) == 0) fenced = !fenced;
+    if (fenced || line.empty() || line[0] != '#') continue;
+    const std::size_t title = line.find_first_not_of('#');
+    if (title == std::string::npos || line[title] != ' ') continue;
+    std::string slug;
+    for (char c : line.substr(title + 1)) {
+      const auto u = static_cast<unsigned char>(c);
+      if (std::isalnum(u) || c == '-' || c == '_')
+        slug += static_cast<char>(std::tolower(u));
+      else if (c == ' ')
+        slug += '-';
+    }
+    const int n = seen[slug]++;
+    anchors.insert(n == 0 ? slug : slug + "-" + std::to_string(n));
+  }
+  return anchors;
 }
 
 TEST(Docs, EveryRelativeLinkPointsAtAFile) {
@@ -54,13 +95,33 @@ TEST(Docs, EveryRelativeLinkPointsAtAFile) {
   ASSERT_GT(pages.size(), 5u);
   int links = 0;
   for (const fs::path& page : pages) {
-    for (const std::string& target : linkTargets(test::readFile(page.string()))) {
+    for (const Link& link : relativeLinks(test::readFile(page.string()))) {
       ++links;
-      EXPECT_TRUE(fs::exists(page.parent_path() / target))
-          << page.filename().string() << " links to " << target << ", which does not exist";
+      const fs::path target = link.file.empty() ? page : page.parent_path() / link.file;
+      const std::string name = page.filename().string() + " links to " + link.file +
+                               (link.anchor.empty() ? "" : "#" + link.anchor);
+      if (!fs::exists(target)) {
+        ADD_FAILURE() << name << ", which does not exist";
+        continue;
+      }
+      if (!link.anchor.empty() && target.extension() == ".md") {
+        EXPECT_EQ(headingAnchors(test::readFile(target.string())).count(link.anchor), 1u)
+            << name << ", a heading that " << target.filename().string() << " does not have";
+      }
     }
   }
   EXPECT_GT(links, 15);
+}
+
+TEST(Docs, EveryPageIsLinkedFromTheReadme) {
+  std::set<std::string> linked;
+  for (const Link& link : relativeLinks(test::readFile(kSource + "/README.md")))
+    linked.insert(fs::path(link.file).lexically_normal().string());
+  for (const auto& entry : fs::directory_iterator(fs::path(kSource) / "docs")) {
+    if (entry.path().extension() != ".md") continue;
+    const std::string page = "docs/" + entry.path().filename().string();
+    EXPECT_EQ(linked.count(page), 1u) << page << " is not in the README's table of docs";
+  }
 }
 
 TEST(Docs, TheReadmeStaysShort) {
