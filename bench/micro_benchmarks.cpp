@@ -164,33 +164,36 @@ rgbdmap::TsdfIntegrator tsdfFor(const rgbdmap::Config& config) {
 
 // Fusing one filtered frame along its lines of sight into an empty map: every block is new
 // (the first keyframe).
+// Argument: fusion threads.
 void BM_TsdfIntegrateIntoEmptyMap(benchmark::State& state) {
   Fixture& f = fixture();
-  const rgbdmap::TsdfIntegrator tsdf = tsdfFor(f.config);
+  rgbdmap::TsdfIntegrator tsdf = tsdfFor(f.config);
+  rgbdmap::WorkerPool pool(static_cast<int>(state.range(0)));
   std::size_t blocks = 0;
   for (auto _ : state) {
     rgbdmap::VoxelMap map(f.config.voxel_size);
-    tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map);
+    tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map, &pool);
     blocks = map.blockCount();
     benchmark::DoNotOptimize(blocks);
   }
   state.counters["blocks"] = static_cast<double>(blocks);
 }
-BENCHMARK(BM_TsdfIntegrateIntoEmptyMap)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TsdfIntegrateIntoEmptyMap)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // The same into a map that already holds the scene (every 10th frame of the sequence): mostly
-// updates of existing blocks.
+// updates of existing blocks. Argument: fusion threads.
 void BM_TsdfIntegrateIntoSceneMap(benchmark::State& state) {
   Fixture& f = fixture();
-  const rgbdmap::TsdfIntegrator tsdf = tsdfFor(f.config);
+  rgbdmap::TsdfIntegrator tsdf = tsdfFor(f.config);
+  rgbdmap::WorkerPool pool(static_cast<int>(state.range(0)));
   rgbdmap::VoxelMap map = *f.scene;
   for (auto _ : state) {
-    tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map);
+    tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map, &pool);
     benchmark::ClobberMemory();
   }
   state.counters["map_blocks"] = static_cast<double>(map.blockCount());
 }
-BENCHMARK(BM_TsdfIntegrateIntoSceneMap)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TsdfIntegrateIntoSceneMap)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // A snapshot of the scene map as a point cloud (what a checkpoint writes), on the fusion side.
 void BM_ExtractSnapshot(benchmark::State& state) {

@@ -96,7 +96,7 @@ TEST(VoxelMap, NoisyViewsOfAFarPlaneConvergeInsteadOfThickening) {
   const CameraIntrinsics c = smallCamera();
   const double sigma = 0.0012 + 0.0019 * (3.5 - 0.4) * (3.5 - 0.4);
   VoxelMap map(0.01);
-  const TsdfIntegrator tsdf = integratorFor(c);
+  TsdfIntegrator tsdf = integratorFor(c);
   std::size_t after_first = 0;
   for (unsigned frame = 1; frame <= 12; ++frame) {
     tsdf.integrate(planeDepth(c, 3.5, 0.3, sigma, frame), grey(c), Eigen::Isometry3d::Identity(),
@@ -125,7 +125,7 @@ TEST(VoxelMap, PointCountIsWhatExtractWritesAcrossBlockBorders) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.translation() = Eigen::Vector3d(-0.03, 0.02, -1.0);
   VoxelMap a(0.01), b(0.01);
-  const TsdfIntegrator tsdf = integratorFor(c);
+  TsdfIntegrator tsdf = integratorFor(c);
   for (unsigned frame = 1; frame <= 4; ++frame) {
     const cv::Mat depth = planeDepth(c, 1.0, -0.5, 0.002, frame);
     tsdf.integrate(depth, grey(c), pose, a);
@@ -142,7 +142,7 @@ TEST(VoxelMap, PointCountIsWhatExtractWritesAcrossBlockBorders) {
 TEST(VoxelMap, MinObservationsLeavesOutVoxelsSeenOnce) {
   const CameraIntrinsics c = smallCamera();
   VoxelMap once(0.01, 2);
-  const TsdfIntegrator tsdf = integratorFor(c);
+  TsdfIntegrator tsdf = integratorFor(c);
   tsdf.integrate(planeDepth(c, 2.0, 0.0, 0.0, 0), grey(c), Eigen::Isometry3d::Identity(), once);
   EXPECT_EQ(once.pointCount(), 0u);
   EXPECT_TRUE(extractOf(once).empty());

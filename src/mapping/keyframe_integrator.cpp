@@ -30,6 +30,7 @@ TsdfIntegrator makeTsdf(const Config& c) {
   t.camera = c.camera;
   t.truncation = c.map_truncation;
   t.truncation_sigmas = c.map_truncation_sigmas;
+  t.min_incidence_cosine = c.map_min_incidence_cosine;
   // Blocks are 8 voxels wide; a sample every 2nd pixel finds every block a surface crosses.
   t.allocation_stride = c.subsample ? 2 : 1;
   return t;
@@ -37,11 +38,12 @@ TsdfIntegrator makeTsdf(const Config& c) {
 
 }  // namespace
 
-KeyframeIntegrator::KeyframeIntegrator(const Config& config)
+KeyframeIntegrator::KeyframeIntegrator(const Config& config, int threads)
     : filter_(makeFilter(config)),
       // Fusion averages many views of each surface, so unsmoothable pixels are dropped.
       smoother_{config.smooth_radius, config.edge_jump, 0.75, true},
       tsdf_(makeTsdf(config)),
+      pool_(threads),
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
       sor_stddev_(config.sor_stddev),
@@ -75,7 +77,7 @@ void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& 
   stats.project_latency.record(secondsSince(project_start));
 
   const auto fuse_start = std::chrono::steady_clock::now();
-  tsdf_.integrate(*depth, *color, frame.pose, map);
+  tsdf_.integrate(*depth, *color, frame.pose, map, &pool_);
   stats.fuse_latency.record(secondsSince(fuse_start));
   stats.integrate_latency.record(secondsSince(start));
 }

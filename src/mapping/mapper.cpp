@@ -8,13 +8,19 @@ namespace {
 // The point count shown while mapping is refreshed every this many keyframes (counting costs
 // about a tenth of a fusion); a snapshot gives the exact count.
 constexpr std::uint64_t kCountPointsEvery = 10;
+// Blocks far from any surface are freed every this many keyframes, once no keyframe has updated
+// them for kPruneIdleKeyframes (blocks in view are updated again and again: freeing them would
+// only allocate them anew) and every voxel is at least kPruneClearanceVoxels in front of a surface.
+constexpr std::uint64_t kPruneEvery = 10;
+constexpr std::uint64_t kPruneIdleKeyframes = 30;
+constexpr float kPruneClearanceVoxels = 2.0f;
 
 double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
 
 }  // namespace
 
 Mapper::Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections)
-    : integrator_(config),
+    : integrator_(config, WorkerPool::resolve(config.map_fusion_threads)),
       voxel_size_(config.voxel_size),
       min_observations_(static_cast<std::uint32_t>(config.map_min_observations)),
       loop_(config.loop),
@@ -27,8 +33,7 @@ bool Mapper::startsSubmap(const Frame& keyframe) const {
   if (active_anchor_ < 0) return true;  // the first anchored keyframe
   const Eigen::Isometry3d moved = active_start_.inverse() * keyframe.pose;
   return active_keyframes_ >= loop_.submap_keyframes ||
-         moved.translation().norm() > loop_.submap_distance ||
-         angle(moved) > loop_.submap_rotation;
+         moved.translation().norm() > loop_.submap_distance || angle(moved) > loop_.submap_rotation;
 }
 
 void Mapper::closeSubmap() {
@@ -56,6 +61,9 @@ void Mapper::fuse(const Frame& keyframe) {
   keyframes_.push_back(keyframe.timestamp, keyframe.pose, keyframe.anchor);
   const std::uint64_t fused = stats_.keyframes.fetch_add(1) + 1;
   if (fused % kCountPointsEvery == 1) stats_.map_points.store(closed_points_ + map_.pointCount());
+  if (fused % kPruneEvery == 0)
+    map_.pruneFreeSpace(kPruneIdleKeyframes,
+                        kPruneClearanceVoxels * static_cast<float>(voxel_size_));
 }
 
 std::shared_ptr<MapCloud> Mapper::snapshot() const {

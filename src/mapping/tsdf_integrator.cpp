@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "rgbdmap/mapping/back_projector.hpp"
 
@@ -14,9 +15,14 @@ float TsdfIntegrator::bandAt(float depth) const {
 
 namespace {
 
+// Rows per task when samples are prepared, blocks per task when voxels are updated: enough work
+// per task that handing tasks out costs nothing, enough tasks that threads finish together.
+constexpr int kRowsPerTask = 16;
+constexpr std::size_t kBlocksPerTask = 32;
+
 // Allocates the blocks along each sampled pixel's ray within the band around its depth.
-void allocate(const TsdfIntegrator& tsdf, const cv::Mat& depth, const Eigen::Isometry3d& pose,
-              VoxelMap& map) {
+void allocate(const TsdfIntegrator& tsdf, const std::vector<TsdfIntegrator::Sample>& samples,
+              int width, int height, const Eigen::Isometry3d& pose, VoxelMap& map) {
   const CameraIntrinsics& cam = tsdf.camera;
   const float block = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
   const float inv_block = 1.0f / block;
@@ -24,12 +30,12 @@ void allocate(const TsdfIntegrator& tsdf, const cv::Mat& depth, const Eigen::Iso
   const Eigen::Vector3f t = pose.translation().cast<float>();
   const int stride = std::max(1, tsdf.allocation_stride);
   Eigen::Vector3i last(INT32_MIN, INT32_MIN, INT32_MIN);
-  for (int v = 0; v < depth.rows; v += stride) {
-    const float* row = depth.ptr<float>(v);
-    for (int u = 0; u < depth.cols; u += stride) {
-      const float d = row[u];
+  for (int v = 0; v < height; v += stride) {
+    const TsdfIntegrator::Sample* row = samples.data() + static_cast<std::size_t>(v) * width;
+    for (int u = 0; u < width; u += stride) {
+      const float d = row[u].depth;
       if (!(d > 0.0f)) continue;
-      const float band = tsdf.bandAt(d);
+      const float band = row[u].band / row[u].scale;  // along the ray
       const Eigen::Vector3f ray =
           R * Eigen::Vector3f(static_cast<float>((u - cam.cx) / cam.fx),
                               static_cast<float>((v - cam.cy) / cam.fy), 1.0f);
@@ -49,6 +55,35 @@ void allocate(const TsdfIntegrator& tsdf, const cv::Mat& depth, const Eigen::Iso
   }
 }
 
+// Adds the blocks already in the map that a view sees through: between the camera and what it
+// measured, beyond the distance where it carves. Allocation only reaches the band around each
+// measurement, so without this an object that went away would never be updated again.
+// Scans the blocks' coordinates (a compact array), not the blocks.
+void touchSeenThrough(const TsdfIntegrator& tsdf,
+                      const std::vector<TsdfIntegrator::Sample>& samples, int width, int height,
+                      const Eigen::Isometry3f& world_to_camera, VoxelMap& map) {
+  const CameraIntrinsics& cam = tsdf.camera;
+  const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
+  const float cx = static_cast<float>(cam.cx) + 0.5f, cy = static_cast<float>(cam.cy) + 0.5f;
+  const float edge = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
+  const float half_diagonal = 0.5f * std::sqrt(3.0f) * edge;
+  const std::vector<Eigen::Vector3i>& coordinates = map.blockCoordinates();
+  for (std::uint32_t i = 0; i < coordinates.size(); ++i) {
+    if (coordinates[i] == VoxelMap::kNoBlock) continue;
+    const Eigen::Vector3f c =
+        world_to_camera * ((coordinates[i].cast<float>() + Eigen::Vector3f::Constant(0.5f)) * edge);
+    if (c.z() <= 0.0f) continue;
+    const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
+    if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(width) &&
+          v < static_cast<float>(height)))
+      continue;
+    const TsdfIntegrator::Sample& s =
+        samples[static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u)];
+    if (s.depth > 0.0f && (s.depth - c.z() + half_diagonal) * s.scale >= s.band)
+      map.touchExisting(i);
+  }
+}
+
 std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) {
   const float mixed = old_value + alpha * (static_cast<float>(new_value) - old_value);
   return static_cast<std::uint8_t>(std::clamp(mixed + 0.5f, 0.0f, 255.0f));
@@ -56,63 +91,158 @@ std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) 
 
 }  // namespace
 
+void TsdfIntegrator::prepareSamples(const cv::Mat& depth, WorkerPool* pool) {
+  const int width = depth.cols, height = depth.rows;
+  samples_.resize(static_cast<std::size_t>(width) * height);
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float sigma_at_1m = kinectDepthSigma(1.0f);
+  const float min_cos = static_cast<float>(std::clamp(min_incidence_cosine, 1e-3, 1.0));
+  const int k = std::max(1, normal_step);
+  // Normals from the depth averaged over a window (holes left out): a single pixel's noise at
+  // 3 m (sigma 1.4 cm, twice the pixel spacing) would make every surface look seen head-on.
+  const cv::Size window(2 * k + 1, 2 * k + 1);
+  cv::compare(depth, 0.0f, valid_, cv::CMP_GT);
+  valid_.convertTo(count_, CV_32F, 1.0 / 255.0);
+  cv::boxFilter(depth, depth_sum_, CV_32F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  cv::boxFilter(count_, count_, CV_32F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  auto point = [&](int u, int v, float d) {
+    return Eigen::Vector3f((static_cast<float>(u) - cx) / fx * d,
+                           (static_cast<float>(v) - cy) / fy * d, d);
+  };
+  // The neighbour `step` pixels away along one axis, or the pixel itself where there is none.
+  auto neighbour = [&](int u, int v, int du, int dv, const Eigen::Vector3f& self) {
+    const int nu = u + du, nv = v + dv;
+    if (nu < 0 || nv < 0 || nu >= width || nv >= height) return self;
+    if (!(depth.ptr<float>(nv)[nu] > 0.0f)) return self;
+    return point(nu, nv, depth_sum_.ptr<float>(nv)[nu] / count_.ptr<float>(nv)[nu]);
+  };
+  auto rows = [&](std::size_t task) {
+    const int first = static_cast<int>(task) * kRowsPerTask;
+    const int last = std::min(height, first + kRowsPerTask);
+    for (int v = first; v < last; ++v) {
+      const float* in = depth.ptr<float>(v);
+      Sample* out = samples_.data() + static_cast<std::size_t>(v) * width;
+      for (int u = 0; u < width; ++u) {
+        const float d = in[u];
+        Sample& s = out[u];
+        if (!(d > 0.0f)) {
+          s = Sample{};
+          continue;
+        }
+        const float sigma = kinectDepthSigma(d);
+        s.depth = d;
+        s.band =
+            std::max(static_cast<float>(truncation), static_cast<float>(truncation_sigmas) * sigma);
+        const float r = sigma_at_1m / sigma;
+        s.weight = r * r;
+        // Incidence from the normal of the measured surface (central differences, one-sided at
+        // holes); a pixel with no neighbour at all is taken as seen head-on.
+        const Eigen::Vector3f p =
+            point(u, v, depth_sum_.ptr<float>(v)[u] / count_.ptr<float>(v)[u]);
+        const Eigen::Vector3f along_u = neighbour(u, v, k, 0, p) - neighbour(u, v, -k, 0, p);
+        const Eigen::Vector3f along_v = neighbour(u, v, 0, k, p) - neighbour(u, v, 0, -k, p);
+        const Eigen::Vector3f normal = along_u.cross(along_v);
+        const float n = normal.norm();
+        const float cosine = n > 0.0f ? std::abs(normal.dot(p)) / (n * p.norm()) : 1.0f;
+        s.scale = std::max(cosine, min_cos);
+        s.weight *= s.scale;
+      }
+    }
+  };
+  const std::size_t tasks = static_cast<std::size_t>((height + kRowsPerTask - 1) / kRowsPerTask);
+  if (pool)
+    pool->run(tasks, rows);
+  else
+    for (std::size_t i = 0; i < tasks; ++i) rows(i);
+}
+
 void TsdfIntegrator::integrate(const cv::Mat& depth, const cv::Mat& color_bgr,
-                               const Eigen::Isometry3d& pose, VoxelMap& map) const {
+                               const Eigen::Isometry3d& pose, VoxelMap& map, WorkerPool* pool) {
   CV_Assert(depth.type() == CV_32FC1 && color_bgr.type() == CV_8UC3 &&
             color_bgr.size() == depth.size());
+  prepareSamples(depth, pool);
   map.beginIntegration();
-  allocate(*this, depth, pose, map);
-
   const Eigen::Isometry3f world_to_camera = pose.inverse().cast<float>();
+  touchSeenThrough(*this, samples_, depth.cols, depth.rows, world_to_camera, map);
+  allocate(*this, samples_, depth.cols, depth.rows, pose, map);
+
   const Eigen::Matrix3f Rcw = world_to_camera.linear();
   const float voxel = static_cast<float>(map.voxelSize());
   const Eigen::Vector3f dx = Rcw.col(0) * voxel, dy = Rcw.col(1) * voxel, dz = Rcw.col(2) * voxel;
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
-  const float width = static_cast<float>(depth.cols), height = static_cast<float>(depth.rows);
+  const int width = depth.cols;
   const float sigma_at_1m = kinectDepthSigma(1.0f);
+  const float fwidth = static_cast<float>(depth.cols), fheight = static_cast<float>(depth.rows);
   constexpr int kEdge = VoxelMap::kBlockEdge;
+  const std::vector<std::uint32_t>& touched = map.touchedBlocks();
 
-  for (const std::uint32_t index : map.touchedBlocks()) {
-    VoxelMap::Block& block = map.block(index);
-    const Eigen::Vector3f origin =
-        world_to_camera * ((block.origin.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * voxel);
-    for (int z = 0; z < kEdge; ++z) {
-      for (int y = 0; y < kEdge; ++y) {
-        Eigen::Vector3f p = origin + static_cast<float>(y) * dy + static_cast<float>(z) * dz;
-        VoxelMap::Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
-        for (int x = 0; x < kEdge; ++x, p += dx) {
-          if (p.z() <= 0.0f) continue;
-          const float inv_z = 1.0f / p.z();
-          const float u = fx * p.x() * inv_z + cx;  // + 0.5: truncation rounds to nearest
-          const float v = fy * p.y() * inv_z + cy;
-          if (!(u >= 0.0f && v >= 0.0f && u < width && v < height)) continue;
-          const int ui = static_cast<int>(u), vi = static_cast<int>(v);
-          const float d = depth.ptr<float>(vi)[ui];
-          if (!(d > 0.0f)) continue;
-          const float sdf = d - p.z();
-          const float sigma = kinectDepthSigma(d);
-          const float band = std::max(static_cast<float>(truncation),
-                                      static_cast<float>(truncation_sigmas) * sigma);
-          if (sdf < -band) continue;  // hidden behind the surface: nothing known
-          const float s = sigma_at_1m / sigma;
-          const float w = s * s;
-          VoxelMap::Voxel& voxel_ref = row[x];
-          const float total = voxel_ref.weight + w;
-          const float alpha = w / total;
-          voxel_ref.sdf += alpha * (std::min(sdf, band) - voxel_ref.sdf);
-          voxel_ref.weight = total;
-          if (sdf < band) {  // near the surface: its colour
-            const cv::Vec3b& c = color_bgr.ptr<cv::Vec3b>(vi)[ui];
-            voxel_ref.r = blend(voxel_ref.r, c[2], alpha);
-            voxel_ref.g = blend(voxel_ref.g, c[1], alpha);
-            voxel_ref.b = blend(voxel_ref.b, c[0], alpha);
+  auto fuse_blocks = [&](std::size_t task) {
+    const std::size_t first = task * kBlocksPerTask;
+    const std::size_t last = std::min(touched.size(), first + kBlocksPerTask);
+    for (std::size_t b = first; b < last; ++b) {
+      VoxelMap::Block& block = map.block(touched[b]);
+      const Eigen::Vector3f origin =
+          world_to_camera *
+          ((block.origin.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * voxel);
+      for (int z = 0; z < kEdge; ++z) {
+        for (int y = 0; y < kEdge; ++y) {
+          const Eigen::Vector3f start =
+              origin + static_cast<float>(y) * dy + static_cast<float>(z) * dz;
+          // A row of voxels projected in one go (no branches: the compiler vectorises it), then
+          // each updated from its pixel.
+          float depth_of[kEdge];
+          int pixel_of[kEdge];
+          for (int x = 0; x < kEdge; ++x) {
+            const float px = start.x() + static_cast<float>(x) * dx.x();
+            const float py = start.y() + static_cast<float>(x) * dx.y();
+            const float pz = start.z() + static_cast<float>(x) * dx.z();
+            const float inv_z = 1.0f / pz;
+            const float u = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
+            const float v = fy * py * inv_z + cy;
+            const bool inside = pz > 0.0f && u >= 0.0f && v >= 0.0f && u < fwidth && v < fheight;
+            depth_of[x] = pz;
+            pixel_of[x] = inside ? static_cast<int>(v) * width + static_cast<int>(u) : -1;
           }
-          if (voxel_ref.observations < 255) ++voxel_ref.observations;
+          VoxelMap::Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
+          for (int x = 0; x < kEdge; ++x) {
+            if (pixel_of[x] < 0) continue;
+            const Sample& s = samples_[static_cast<std::size_t>(pixel_of[x])];
+            if (!(s.depth > 0.0f)) continue;
+            const float sdf = (s.depth - depth_of[x]) * s.scale;  // to the surface, not the pixel
+            if (sdf < -s.band) continue;  // hidden behind the surface: nothing known
+            const bool near = sdf < s.band;
+            // Free space: as sure as a measurement at the voxel's own depth would be (a far
+            // surface seen through a voxel leaves no doubt that it is empty).
+            float w = s.weight;
+            if (!near) {
+              const float r = sigma_at_1m / kinectDepthSigma(depth_of[x]);
+              w = r * r * s.scale;
+            }
+            VoxelMap::Voxel& voxel_ref = row[x];
+            const float total = voxel_ref.weight + w;
+            const float alpha = w / total;
+            voxel_ref.sdf += alpha * (std::min(sdf, s.band) - voxel_ref.sdf);
+            voxel_ref.weight = total;
+            if (near) {  // near the surface: its colour
+              const cv::Vec3b& c =
+                  color_bgr.ptr<cv::Vec3b>(pixel_of[x] / width)[pixel_of[x] % width];
+              voxel_ref.r = blend(voxel_ref.r, c[2], alpha);
+              voxel_ref.g = blend(voxel_ref.g, c[1], alpha);
+              voxel_ref.b = blend(voxel_ref.b, c[0], alpha);
+            }
+            if (voxel_ref.observations < 255) ++voxel_ref.observations;
+          }
         }
       }
     }
-  }
+  };
+  const std::size_t tasks = (touched.size() + kBlocksPerTask - 1) / kBlocksPerTask;
+  if (pool)
+    pool->run(tasks, fuse_blocks);
+  else
+    for (std::size_t i = 0; i < tasks; ++i) fuse_blocks(i);
   map.finishIntegration();
 }
 

@@ -22,6 +22,8 @@ bool packKey(const Eigen::Vector3i& coords, std::uint64_t& key) {
 
 }  // namespace
 
+const Eigen::Vector3i VoxelMap::kNoBlock(INT32_MIN, INT32_MIN, INT32_MIN);
+
 VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
     : voxel_size_(voxel_size),
       min_observations_(std::clamp<std::uint32_t>(min_observations, 1, 255)) {}
@@ -55,15 +57,53 @@ Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
 std::uint32_t VoxelMap::touchBlock(const Eigen::Vector3i& block_coords) {
   std::uint64_t key;
   if (!packKey(block_coords, key)) return UINT32_MAX;
-  const auto [it, inserted] =
-      block_index_.try_emplace(key, static_cast<std::uint32_t>(blocks_.size()));
-  if (inserted) blocks_.emplace_back().origin = block_coords * kBlockEdge;
-  Block& b = blocks_[it->second];
+  const std::uint32_t slot =
+      free_.empty() ? static_cast<std::uint32_t>(blocks_.size()) : free_.back();
+  const auto [it, inserted] = block_index_.try_emplace(key, slot);
+  if (inserted) {
+    if (free_.empty()) {
+      blocks_.emplace_back();
+      coordinates_.push_back(block_coords);
+    } else {
+      free_.pop_back();
+      blocks_[slot] = Block{};
+      coordinates_[slot] = block_coords;
+    }
+    blocks_[slot].origin = block_coords * kBlockEdge;
+  }
+  touchExisting(it->second);
+  return it->second;
+}
+
+void VoxelMap::touchExisting(std::uint32_t index) {
+  Block& b = blocks_[index];
   if (b.touched_in != integration_) {
     b.touched_in = integration_;
-    touched_.push_back(it->second);
+    touched_.push_back(index);
   }
-  return it->second;
+}
+
+std::size_t VoxelMap::pruneFreeSpace(std::uint64_t idle, float clearance) {
+  std::size_t freed = 0;
+  for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
+    Block& b = blocks_[i];
+    if (!b.in_use || b.touched_in + idle >= integration_) continue;
+    const bool free_space = std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
+      return v.weight <= 0.0f || v.sdf >= clearance;
+    });
+    if (!free_space) continue;
+    std::uint64_t key;
+    packKey(coordinates_[i], key);
+    block_index_.erase(key);
+    points_ -= b.surface_points;
+    b.surface_points = 0;
+    b.in_use = false;
+    coordinates_[i] = kNoBlock;
+    free_.push_back(i);
+    ++freed;
+  }
+  // Freed blocks may still be listed for counting: they count nothing now.
+  return freed;
 }
 
 const VoxelMap::Block* VoxelMap::findBlock(const Eigen::Vector3i& block_coords) const {
@@ -177,12 +217,13 @@ void VoxelMap::finishIntegration() {
 std::size_t VoxelMap::pointCount() {
   for (const std::uint32_t i : count_due_) {
     Block& b = blocks_[i];
+    b.count_due = false;
+    if (!b.in_use) continue;
     std::uint32_t count = 0;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
     points_ += count;
     points_ -= b.surface_points;
     b.surface_points = count;
-    b.count_due = false;
   }
   count_due_.clear();
   return points_;
@@ -192,7 +233,7 @@ void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   cloud.clear();
   cloud.reserve(points_);
   for (const Block& b : blocks_) {
-    if (b.surface_points == 0 && !b.count_due) continue;
+    if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
       pcl::PointXYZRGB point;
       point.x = p.x();
@@ -213,7 +254,7 @@ void VoxelMap::extract(std::vector<SurfacePoint>& points) const {
   points.clear();
   points.reserve(points_);
   for (const Block& b : blocks_) {
-    if (b.surface_points == 0 && !b.count_due) continue;
+    if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
       points.push_back({p, v.weight, v.r, v.g, v.b});
     });

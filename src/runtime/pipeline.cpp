@@ -65,8 +65,8 @@ std::string statusLine(const RunStats& s, double elapsed) {
                 elapsed > 0 ? static_cast<double>(s.frames_processed.load()) / elapsed : 0.0,
                 static_cast<unsigned long long>(s.keyframes.load()),
                 static_cast<unsigned long long>(s.map_points.load()),
-                static_cast<unsigned long long>(s.queue_depth.load()),
-                loops(s).c_str(), s.tracking_lost.load() ? " | tracking lost" : "");
+                static_cast<unsigned long long>(s.queue_depth.load()), loops(s).c_str(),
+                s.tracking_lost.load() ? " | tracking lost" : "");
   return line;
 }
 
@@ -92,6 +92,9 @@ Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineO
 int Pipeline::run(RunControl& control) {
   const CameraIntrinsics camera = source_->intrinsics();
   config_.camera = camera;
+  // A live camera leaves the other cores to tracking; a replay is limited by fusion alone.
+  if (config_.map_fusion_threads == 0)
+    config_.map_fusion_threads = source_->isLive() ? 1 : WorkerPool::resolve(0);
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
   // move the trajectories and the map's submaps.
   stats_.loop_closure = config_.loop.enabled && tracksKeyframes(config_);

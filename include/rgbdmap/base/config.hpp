@@ -51,7 +51,10 @@ struct Config {
   double voxel_size = 0.01;      // map.voxel_size (m)
   int map_min_observations = 1;  // map.min_observations: voxels seen fewer times are not written
   double map_truncation = 0.03;  // map.truncation: narrowest TSDF band (m)
-  double map_truncation_sigmas = 3.0;  // map.truncation_sigmas: band in depth-noise sigmas
+  double map_truncation_sigmas = 3.0;     // map.truncation_sigmas: band in depth-noise sigmas
+  double map_min_incidence_cosine = 0.2;  // map.min_incidence_cosine: clamp of cos(incidence)
+  int map_fusion_threads =
+      0;  // map.fusion_threads: 0 = every core in a replay, 1 for a live camera
 
   int checkpoint_every_keyframes = 50;   // checkpoint.every_keyframes (0 = off)
   double checkpoint_every_seconds = 60;  // checkpoint.every_seconds (0 = off)

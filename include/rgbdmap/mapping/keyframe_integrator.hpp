@@ -3,6 +3,7 @@
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
 #include "rgbdmap/mapping/depth_smoother.hpp"
@@ -16,7 +17,8 @@ namespace rgbdmap {
 // into the voxel map. Buffers are kept between keyframes.
 class KeyframeIntegrator {
  public:
-  explicit KeyframeIntegrator(const Config& config);
+  // `threads`: threads that fuse (the caller's included), from map.fusion_threads resolved.
+  KeyframeIntegrator(const Config& config, int threads = 1);
   void integrate(const Frame& frame, VoxelMap& map, RunStats& stats);
 
  private:
@@ -25,6 +27,7 @@ class KeyframeIntegrator {
   DepthFilter filter_;
   DepthSmoother smoother_;
   TsdfIntegrator tsdf_;
+  WorkerPool pool_;
   bool statistical_ = false;
   int sor_mean_k_ = 50;
   double sor_stddev_ = 1.0;

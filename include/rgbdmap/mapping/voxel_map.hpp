@@ -46,11 +46,12 @@ class VoxelMap {
   static constexpr int kBlockEdge = 1 << kBlockBits;  // voxels per block edge
   static constexpr int kBlockVoxels = kBlockEdge * kBlockEdge * kBlockEdge;
   struct Block {
-    Eigen::Vector3i origin;                  // voxel coordinates of the block's first voxel
-    std::array<Voxel, kBlockVoxels> voxels;  // x fastest, then y, then z
-    std::uint32_t surface_points = 0;        // what extract() wrote from it when last counted
-    std::uint64_t touched_in = 0;            // the last integration that updated it
-    bool count_due = false;                  // it or a neighbour changed since it was counted
+    Eigen::Vector3i origin = Eigen::Vector3i::Zero();  // voxel coordinates of its first voxel
+    std::array<Voxel, kBlockVoxels> voxels;            // x fastest, then y, then z
+    std::uint32_t surface_points = 0;  // what extract() wrote from it when last counted
+    std::uint64_t touched_in = 0;      // the last integration that updated it
+    bool count_due = false;            // it or a neighbour changed since it was counted
+    bool in_use = true;                // false: pruned, its slot waits for a new block
   };
 
   // Voxels seen in fewer than min_observations frames are kept (more may come) but not
@@ -59,7 +60,8 @@ class VoxelMap {
 
   double voxelSize() const { return voxel_size_; }
   std::uint32_t minObservations() const { return min_observations_; }
-  std::size_t blockCount() const { return blocks_.size(); }
+  // Blocks in use (pruned ones excluded).
+  std::size_t blockCount() const { return blocks_.size() - free_.size(); }
   std::size_t memoryBytes() const;
   // Points extract() writes. Counting is left until asked for: after each integration it would
   // revisit the blocks updated and their neighbours, about a tenth of the fusion time.
@@ -84,6 +86,16 @@ class VoxelMap {
   // its index, or UINT32_MAX outside the key range.
   std::uint32_t touchBlock(const Eigen::Vector3i& block_coords);
   const std::vector<std::uint32_t>& touchedBlocks() const { return touched_; }
+  // Adds an existing block to the working set (one that free space seen through may update).
+  void touchExisting(std::uint32_t index);
+  // Block coordinates by block index, for scans over every block without touching the blocks
+  // themselves; a pruned slot holds kNoBlock.
+  const std::vector<Eigen::Vector3i>& blockCoordinates() const { return coordinates_; }
+  static const Eigen::Vector3i kNoBlock;
+  // Frees the blocks far from any surface: not updated in the last `idle` integrations, and every
+  // observed voxel at least `clearance` in front of a surface. What they held is free space, and
+  // a later view that measures near them allocates them again. Returns how many were freed.
+  std::size_t pruneFreeSpace(std::uint64_t idle, float clearance);
   Block& block(std::uint32_t index) { return blocks_[index]; }
   const Block& block(std::uint32_t index) const { return blocks_[index]; }
   // Marks the working set and the blocks next to it (whose border voxels may have changed
@@ -109,7 +121,9 @@ class VoxelMap {
   std::size_t points_ = 0;
   std::uint64_t integration_ = 0;
   tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // -> blocks_
-  std::deque<Block> blocks_;  // a deque: growing never copies the blocks there are
+  std::deque<Block> blocks_;                  // a deque: growing never copies the blocks there are
+  std::vector<Eigen::Vector3i> coordinates_;  // block coordinates by index (kNoBlock: free)
+  std::vector<std::uint32_t> free_;           // pruned slots, reused first
   std::vector<std::uint32_t> touched_;
   std::vector<std::uint32_t> count_due_;  // blocks with count_due set
 };
