@@ -160,10 +160,10 @@ TEST(FreeSpace, AnObjectThatWentAwayIsCarved) {
   for (int i = 0; i < 30; ++i) view({wall, box});
   const int before = boxPoints();
   EXPECT_GT(before, 3000);  // the 60 x 60 cm face at 1 cm
-  for (int i = 0; i < 30; ++i) view({wall});
+  for (int i = 0; i < 60; ++i) view({wall});
   const int after = boxPoints();
   std::cout << "points on the box's face: " << before << " while there, " << after
-            << " after 30 views without it\n";
+            << " after 60 views without it\n";
   EXPECT_EQ(after, 0);
 }
 

@@ -31,8 +31,11 @@ TsdfIntegrator makeTsdf(const Config& c) {
   t.truncation = c.map_truncation;
   t.truncation_sigmas = c.map_truncation_sigmas;
   t.min_incidence_cosine = c.map_min_incidence_cosine;
-  // Blocks are 8 voxels wide; a sample every 2nd pixel finds every block a surface crosses.
-  t.allocation_stride = c.subsample ? 2 : 1;
+  // Samples at most half a block apart at the farthest depth fused find every block a surface
+  // crosses (1 cm voxels, 4 m: every 4th pixel).
+  const double block = c.voxel_size * VoxelMap::kBlockEdge;
+  const int spaced = static_cast<int>(0.5 * block * c.camera.fx / std::max(c.max_depth, 0.1));
+  t.allocation_stride = c.subsample ? std::clamp(spaced, 1, 4) : 1;
   return t;
 }
 

@@ -35,7 +35,7 @@ void allocate(const TsdfIntegrator& tsdf, const std::vector<TsdfIntegrator::Samp
     for (int u = 0; u < width; u += stride) {
       const float d = row[u].depth;
       if (!(d > 0.0f)) continue;
-      const float band = row[u].band / row[u].scale;  // along the ray
+      const float band = row[u].band;
       const Eigen::Vector3f ray =
           R * Eigen::Vector3f(static_cast<float>((u - cam.cx) / cam.fx),
                               static_cast<float>((v - cam.cy) / cam.fy), 1.0f);
@@ -94,59 +94,71 @@ std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) 
 void TsdfIntegrator::prepareSamples(const cv::Mat& depth, WorkerPool* pool) {
   const int width = depth.cols, height = depth.rows;
   samples_.resize(static_cast<std::size_t>(width) * height);
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const float sigma_at_1m = kinectDepthSigma(1.0f);
   const float min_cos = static_cast<float>(std::clamp(min_incidence_cosine, 1e-3, 1.0));
-  const int k = std::max(1, normal_step);
-  // Normals from the depth averaged over a window (holes left out): a single pixel's noise at
-  // 3 m (sigma 1.4 cm, twice the pixel spacing) would make every surface look seen head-on.
-  const cv::Size window(2 * k + 1, 2 * k + 1);
+
+  // Incidence varies slowly across a surface, so it is taken on a grid of cells of cell x cell
+  // pixels: the depth averaged over each cell (holes left out) and the normal from the cells on
+  // either side. Averaging matters: a single pixel's noise at 3 m (sigma 1.4 cm, twice the pixel
+  // spacing) would make every surface look seen head-on.
+  const int cell = std::max(1, normal_cell);
+  const cv::Size grid((width + cell - 1) / cell, (height + cell - 1) / cell);
   cv::compare(depth, 0.0f, valid_, cv::CMP_GT);
-  valid_.convertTo(count_, CV_32F, 1.0 / 255.0);
-  cv::boxFilter(depth, depth_sum_, CV_32F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
-  cv::boxFilter(count_, count_, CV_32F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
-  auto point = [&](int u, int v, float d) {
-    return Eigen::Vector3f((static_cast<float>(u) - cx) / fx * d,
-                           (static_cast<float>(v) - cy) / fy * d, d);
+  valid_.convertTo(valid_float_, CV_32F, 1.0 / 255.0);
+  cv::resize(depth, depth_mean_, grid, 0, 0, cv::INTER_AREA);
+  cv::resize(valid_float_, valid_mean_, grid, 0, 0, cv::INTER_AREA);
+  cosine_.create(grid, CV_32F);
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  // The camera-frame point at the centre of cell (i, j), false where the cell holds no depth.
+  auto point = [&](int i, int j, Eigen::Vector3f& p) {
+    if (i < 0 || j < 0 || i >= grid.width || j >= grid.height) return false;
+    const float share = valid_mean_.ptr<float>(j)[i];
+    if (share < 0.25f) return false;
+    const float d = depth_mean_.ptr<float>(j)[i] / share;
+    const float u = (static_cast<float>(i) + 0.5f) * static_cast<float>(cell) - 0.5f;
+    const float v = (static_cast<float>(j) + 0.5f) * static_cast<float>(cell) - 0.5f;
+    p = Eigen::Vector3f((u - cx) / fx * d, (v - cy) / fy * d, d);
+    return true;
   };
-  // The neighbour `step` pixels away along one axis, or the pixel itself where there is none.
-  auto neighbour = [&](int u, int v, int du, int dv, const Eigen::Vector3f& self) {
-    const int nu = u + du, nv = v + dv;
-    if (nu < 0 || nv < 0 || nu >= width || nv >= height) return self;
-    if (!(depth.ptr<float>(nv)[nu] > 0.0f)) return self;
-    return point(nu, nv, depth_sum_.ptr<float>(nv)[nu] / count_.ptr<float>(nv)[nu]);
+  // Central differences, one-sided at holes; a cell with no neighbour is taken as seen head-on.
+  auto difference = [&](int i, int j, int di, int dj, const Eigen::Vector3f& p) {
+    Eigen::Vector3f after = p, before = p;
+    point(i + di, j + dj, after);
+    point(i - di, j - dj, before);
+    return Eigen::Vector3f(after - before);
   };
+  for (int j = 0; j < grid.height; ++j) {
+    float* out = cosine_.ptr<float>(j);
+    for (int i = 0; i < grid.width; ++i) {
+      Eigen::Vector3f p;
+      out[i] = 1.0f;
+      if (!point(i, j, p)) continue;
+      const Eigen::Vector3f normal = difference(i, j, 1, 0, p).cross(difference(i, j, 0, 1, p));
+      const float n = normal.norm();
+      if (n > 0.0f) out[i] = std::max(std::abs(normal.dot(p)) / (n * p.norm()), min_cos);
+    }
+  }
+
+  const float band_floor = static_cast<float>(truncation);
+  const float band_sigmas = static_cast<float>(truncation_sigmas);
   auto rows = [&](std::size_t task) {
     const int first = static_cast<int>(task) * kRowsPerTask;
     const int last = std::min(height, first + kRowsPerTask);
     for (int v = first; v < last; ++v) {
       const float* in = depth.ptr<float>(v);
+      const float* cosines = cosine_.ptr<float>(v / cell);
       Sample* out = samples_.data() + static_cast<std::size_t>(v) * width;
       for (int u = 0; u < width; ++u) {
         const float d = in[u];
-        Sample& s = out[u];
-        if (!(d > 0.0f)) {
-          s = Sample{};
-          continue;
-        }
         const float sigma = kinectDepthSigma(d);
-        s.depth = d;
-        s.band =
-            std::max(static_cast<float>(truncation), static_cast<float>(truncation_sigmas) * sigma);
         const float r = sigma_at_1m / sigma;
-        s.weight = r * r;
-        // Incidence from the normal of the measured surface (central differences, one-sided at
-        // holes); a pixel with no neighbour at all is taken as seen head-on.
-        const Eigen::Vector3f p =
-            point(u, v, depth_sum_.ptr<float>(v)[u] / count_.ptr<float>(v)[u]);
-        const Eigen::Vector3f along_u = neighbour(u, v, k, 0, p) - neighbour(u, v, -k, 0, p);
-        const Eigen::Vector3f along_v = neighbour(u, v, 0, k, p) - neighbour(u, v, 0, -k, p);
-        const Eigen::Vector3f normal = along_u.cross(along_v);
-        const float n = normal.norm();
-        const float cosine = n > 0.0f ? std::abs(normal.dot(p)) / (n * p.norm()) : 1.0f;
-        s.scale = std::max(cosine, min_cos);
-        s.weight *= s.scale;
+        const float scale = cosines[u / cell];
+        const bool measured = d > 0.0f;
+        out[u].depth = measured ? d : 0.0f;
+        out[u].band = std::max(band_floor, band_sigmas * sigma);
+        out[u].scale = scale;
+        out[u].weight = r * r * scale;
       }
     }
   };
@@ -164,7 +176,8 @@ void TsdfIntegrator::integrate(const cv::Mat& depth, const cv::Mat& color_bgr,
   prepareSamples(depth, pool);
   map.beginIntegration();
   const Eigen::Isometry3f world_to_camera = pose.inverse().cast<float>();
-  touchSeenThrough(*this, samples_, depth.cols, depth.rows, world_to_camera, map);
+  if (map.integrations() % std::max(1, seen_through_every) == 0)
+    touchSeenThrough(*this, samples_, depth.cols, depth.rows, world_to_camera, map);
   allocate(*this, samples_, depth.cols, depth.rows, pose, map);
 
   const Eigen::Matrix3f Rcw = world_to_camera.linear();

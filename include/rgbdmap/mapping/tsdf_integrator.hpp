@@ -35,7 +35,10 @@ struct TsdfIntegrator {
   double truncation_sigmas = 3.0;     // band in units of the depth noise
   int allocation_stride = 2;          // every n-th pixel of every n-th row allocates blocks
   double min_incidence_cosine = 0.2;  // incidence cosines are clamped here (1: along the ray)
-  int normal_step = 3;  // pixels to the neighbours a normal is taken from, and averaging radius
+  // Blocks a view sees through are looked for in every n-th image only: a scan of the whole map
+  // costs about as much as allocating, and what went away is carved a few frames later instead.
+  int seen_through_every = 4;
+  int normal_cell = 4;  // incidence is taken on cells of this many pixels squared
 
   // depth: CV_32FC1 metres (0 = none), colour: CV_8UC3 BGR of the same size, pose camera-to-world.
   // With a pool the voxels are updated on all its threads (each block by one thread: the map
@@ -56,7 +59,7 @@ struct TsdfIntegrator {
  private:
   void prepareSamples(const cv::Mat& depth, WorkerPool* pool);
   std::vector<Sample> samples_;  // row-major, one per pixel
-  cv::Mat valid_, count_, depth_sum_;
+  cv::Mat valid_, valid_float_, depth_mean_, valid_mean_, cosine_;  // incidence grid
 };
 
 }  // namespace rgbdmap

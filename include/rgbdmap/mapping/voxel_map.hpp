@@ -82,6 +82,7 @@ class VoxelMap {
   // Starts an integration: blocks allocated or fetched with touchBlock() until
   // finishIntegration() form its working set.
   void beginIntegration() { ++integration_; }
+  std::uint64_t integrations() const { return integration_; }
   // The block with these block coordinates, created if new, added to the working set; returns
   // its index, or UINT32_MAX outside the key range.
   std::uint32_t touchBlock(const Eigen::Vector3i& block_coords);
