@@ -4,21 +4,12 @@
 #include <vector>
 
 namespace rgbdmap {
-namespace {
-
-// Room for the per-frame trajectory reserved up front (18 minutes at 30 frames/s), so appending
-// a pose does not allocate in a run of ordinary length; longer runs grow it rarely (doubling).
-constexpr std::size_t kReservedFrames = 1 << 15;
-
-}  // namespace
-
 FrameTracker::FrameTracker(const Config& config, std::unique_ptr<PoseProvider> poses,
-                           RunStats& stats, const PoseCorrections* corrections)
+                           RunStats& stats, PoseSink* trajectory)
     : poses_(std::move(poses)),
       selector_(makeKeyframeSelector(config)),
-      trajectory_(kReservedFrames),
-      stats_(stats),
-      corrections_(corrections) {}
+      trajectory_(trajectory),
+      stats_(stats) {}
 
 bool FrameTracker::track(Frame& frame) {
   const auto start = std::chrono::steady_clock::now();
@@ -41,7 +32,8 @@ bool FrameTracker::track(Frame& frame) {
       break;
   }
   stats_.tracking_lost.store(state == TrackingState::kLost, std::memory_order_relaxed);
-  if (posed || state == TrackingState::kLost) trajectory_.push_back(frame.timestamp, frame.pose, frame.anchor);
+  if (trajectory_ && (posed || state == TrackingState::kLost))
+    trajectory_->record(frame.timestamp, frame.pose, frame.anchor);
   if (!posed) {
     stats_.frames_without_pose.fetch_add(1, std::memory_order_relaxed);
     return false;

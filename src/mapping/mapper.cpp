@@ -19,13 +19,15 @@ double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).
 
 }  // namespace
 
-Mapper::Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections)
+Mapper::Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections,
+               PoseSink* keyframe_trajectory)
     : integrator_(config, WorkerPool::resolve(config.map_fusion_threads)),
       voxel_size_(config.voxel_size),
       min_observations_(static_cast<std::uint32_t>(config.map_min_observations)),
       loop_(config.loop),
       corrections_(corrections),
       map_(voxel_size_, min_observations_),
+      keyframe_sink_(keyframe_trajectory ? keyframe_trajectory : &keyframes_),
       stats_(stats) {}
 
 bool Mapper::startsSubmap(const Frame& keyframe) const {
@@ -58,7 +60,7 @@ void Mapper::fuse(const Frame& keyframe) {
   }
   integrator_.integrate(keyframe, map_, stats_);
   ++active_keyframes_;
-  keyframes_.push_back(keyframe.timestamp, keyframe.pose, keyframe.anchor);
+  keyframe_sink_->record(keyframe.timestamp, keyframe.pose, keyframe.anchor);
   const std::uint64_t fused = stats_.keyframes.fetch_add(1) + 1;
   if (fused % kCountPointsEvery == 1) stats_.map_points.store(closed_points_ + map_.pointCount());
   if (fused % kPruneEvery == 0)

@@ -161,10 +161,9 @@ void CheckpointWriter::run() {
     else
       result.error += "; no complete map has been written to " + path + " yet";
     for (const TrajectoryFile& t : trajectories) {
-      try {
-        t.trajectory->save(t.path);
-      } catch (const std::exception& e) {
-        result.error += std::string(result.error.empty() ? "" : "; ") + e.what();
+      std::string error;
+      if (!t->persist(error)) {
+        result.error += (result.error.empty() ? "" : "; ") + error;
         result.ok = false;
       }
     }

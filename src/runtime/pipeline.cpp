@@ -70,18 +70,10 @@ std::string statusLine(const RunStats& s, double elapsed) {
   return line;
 }
 
-// The trajectories written with every checkpoint: keyframes (from the fusion side) and every
-// frame (from the tracking side).
-std::vector<CheckpointWriter::TrajectoryFile> trajectoryFiles(
-    const PipelineOutputs& outputs, const Mapper& mapper,
-    std::shared_ptr<const Trajectory> frames) {
-  std::vector<CheckpointWriter::TrajectoryFile> files;
-  if (!outputs.trajectory_path.empty())
-    files.push_back(
-        {std::make_shared<const Trajectory>(mapper.keyframeTrajectory()), outputs.trajectory_path});
-  if (!outputs.frame_trajectory_path.empty())
-    files.push_back({std::move(frames), outputs.frame_trajectory_path});
-  return files;
+// A trajectory file streamed as it is recorded (null when not asked for).
+std::shared_ptr<TrajectoryStream> streamTo(const std::string& path,
+                                           const PoseCorrections* corrections) {
+  return path.empty() ? nullptr : std::make_shared<TrajectoryStream>(path, corrections);
 }
 
 }  // namespace
@@ -104,9 +96,18 @@ int Pipeline::run(RunControl& control) {
     corrections = std::make_unique<PoseCorrections>();
     loop_closer = std::make_unique<LoopCloser>(config_, *corrections, stats_, !source_->isLive());
   }
+  // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
+  // frame (from the tracking side), streamed to their files rather than held.
+  const std::shared_ptr<TrajectoryStream> keyframe_file =
+      streamTo(outputs_.trajectory_path, corrections.get());
+  const std::shared_ptr<TrajectoryStream> frame_file =
+      streamTo(outputs_.frame_trajectory_path, corrections.get());
+  std::vector<CheckpointWriter::TrajectoryFile> trajectory_files;
+  for (const auto& file : {keyframe_file, frame_file})
+    if (file) trajectory_files.push_back(file);
   FrameTracker tracker(config_, makePoseProvider(config_, loop_closer.get()), stats_,
-                       corrections.get());
-  Mapper mapper(config_, stats_, corrections.get());
+                       frame_file.get());
+  Mapper mapper(config_, stats_, corrections.get(), keyframe_file.get());
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config_), stats_.loop_closure ? "on" : "off");
@@ -191,12 +192,11 @@ int Pipeline::run(RunControl& control) {
                         error.set(message);
                         control.stop.store(true);
                       });
-  // Checkpoints: the tracking thread copies the per-frame trajectory (cheap), the fusion thread
-  // adds the map snapshot and the keyframe trajectory and hands all to the writer.
+  // Checkpoints: the fusion thread takes the map snapshot and hands it to the writer, which
+  // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
-    auto frames = std::make_shared<const Trajectory>(tracker.trajectory());
-    fusion.request(MapRequest::kCheckpoint, [this, &writer, frames](const Mapper& m) {
-      writer.submit(m.snapshot(), outputs_.map_path, trajectoryFiles(outputs_, m, frames));
+    fusion.request(MapRequest::kCheckpoint, [this, &writer, &trajectory_files](const Mapper& m) {
+      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files);
     });
   };
 
@@ -286,9 +286,7 @@ int Pipeline::run(RunControl& control) {
 
   // Final save, through the writer so it is ordered after any checkpoint in flight.
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
-  writer.submit(
-      final_map, outputs_.map_path,
-      trajectoryFiles(outputs_, mapper, std::make_shared<const Trajectory>(tracker.trajectory())));
+  writer.submit(final_map, outputs_.map_path, trajectory_files);
   publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;

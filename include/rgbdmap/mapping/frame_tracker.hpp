@@ -7,9 +7,9 @@
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/keyframe_selector.hpp"
-#include "rgbdmap/tracking/anchored_trajectory.hpp"
-#include "rgbdmap/tracking/pose_provider.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
+#include "rgbdmap/tracking/pose_provider.hpp"
+#include "rgbdmap/tracking/pose_sink.hpp"
 
 namespace rgbdmap {
 
@@ -19,9 +19,11 @@ namespace rgbdmap {
 // up the next frame's pose.
 class FrameTracker {
  public:
-  // `corrections` (may be null): the pose graph's, applied to the trajectory when it is written.
+  // `trajectory` (may be null) is given every frame that got a pose, in order, with its anchor; a
+  // lost frame carries the pose the tracker predicted for it. Frames the source has no pose for
+  // at all (a gap in the ground truth) are not given.
   FrameTracker(const Config& config, std::unique_ptr<PoseProvider> poses, RunStats& stats,
-               const PoseCorrections* corrections = nullptr);
+               PoseSink* trajectory = nullptr);
 
   // Estimates the frame's pose and records it. Returns true when the frame should be fused; call
   // acceptKeyframe() once it has been handed over (if it could not be, the next frame is
@@ -29,10 +31,6 @@ class FrameTracker {
   bool track(Frame& frame);
   void acceptKeyframe(const Frame& frame);
 
-  // Every frame that got a pose, in order; a lost frame carries the pose the tracker predicted
-  // for it. Frames the source has no pose for at all (a gap in the ground truth) are absent.
-  // With loop closure, every pose follows the latest correction of its keyframe.
-  Trajectory trajectory() const { return trajectory_.resolve(corrections_); }
   std::uint64_t keyframesAccepted() const { return keyframes_accepted_; }
   TrackingState state() const { return poses_->state(); }
   const PoseProvider& poses() const { return *poses_; }
@@ -40,9 +38,8 @@ class FrameTracker {
  private:
   std::unique_ptr<PoseProvider> poses_;
   KeyframeSelector selector_;
-  AnchoredTrajectory trajectory_;
+  PoseSink* trajectory_;
   RunStats& stats_;
-  const PoseCorrections* corrections_;
   std::uint64_t keyframes_accepted_ = 0;
 };
 

@@ -26,13 +26,17 @@ namespace rgbdmap {
 // voxel: when a loop closes, whole submaps move with the graph and nothing is fused again.
 class Mapper {
  public:
-  Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections = nullptr);
+  // `keyframe_trajectory` (may be null: then the Mapper keeps it, see keyframeTrajectory()) is
+  // given each fused keyframe's pose as tracked, with its anchor.
+  Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections = nullptr,
+         PoseSink* keyframe_trajectory = nullptr);
 
   void fuse(const Frame& keyframe);
 
   // A copy of the map as a point cloud (what a checkpoint writes).
   std::shared_ptr<MapCloud> snapshot() const;
-  // The fused keyframes' poses, corrected by the latest loop closures.
+  // The fused keyframes' poses, corrected by the latest loop closures (empty when they went to a
+  // sink of the caller's).
   Trajectory keyframeTrajectory() const { return keyframes_.resolve(corrections_); }
   std::size_t submaps() const { return closed_.size() + 1; }
 
@@ -56,6 +60,7 @@ class Mapper {
   std::vector<Submap> closed_;
   std::size_t closed_points_ = 0;
   AnchoredTrajectory keyframes_;
+  PoseSink* keyframe_sink_;  // keyframes_ or the caller's
   RunStats& stats_;
 };
 

@@ -22,8 +22,7 @@ class SurfaceCloud {
 
   std::size_t size() const { return exact_.empty() ? points_.size() : exact_.size(); }
   std::size_t memoryBytes() const {
-    return points_.capacity() * sizeof(Packed) +
-           exact_.capacity() * sizeof(VoxelMap::SurfacePoint);
+    return points_.capacity() * sizeof(Packed) + exact_.capacity() * sizeof(VoxelMap::SurfacePoint);
   }
   VoxelMap::SurfacePoint operator[](std::size_t i) const;
 

@@ -58,7 +58,7 @@ struct TsdfIntegrator {
 
  private:
   void prepareSamples(const cv::Mat& depth, WorkerPool* pool);
-  std::vector<Sample> samples_;  // row-major, one per pixel
+  std::vector<Sample> samples_;                                     // row-major, one per pixel
   cv::Mat valid_, valid_float_, depth_mean_, valid_mean_, cosine_;  // incidence grid
 };
 

@@ -9,8 +9,8 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/runtime/trajectory_stream.hpp"
 
 namespace rgbdmap {
 
@@ -33,11 +33,8 @@ class CheckpointWriter {
     double seconds = 0.0;
   };
   using Callback = std::function<void(const Result&)>;
-  // A trajectory written beside the map in the same checkpoint (TUM format, temp file + rename).
-  struct TrajectoryFile {
-    std::shared_ptr<const Trajectory> trajectory;
-    std::string path;
-  };
+  // A trajectory written beside the map in the same checkpoint: what it recorded since the last.
+  using TrajectoryFile = std::shared_ptr<TrajectoryStream>;
 
   explicit CheckpointWriter(Callback on_done = nullptr);
   ~CheckpointWriter();  // finishes a pending write, then stops

@@ -1,0 +1,155 @@
+#include "rgbdmap/runtime/trajectory_stream.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace rgbdmap {
+namespace {
+
+constexpr char kHeader[] = "# timestamp tx ty tz qx qy qz qw\n";
+
+// One TUM line, as Trajectory::save writes it; with the anchor appended for the spool.
+void formatLine(std::string& out, double timestamp, const Eigen::Isometry3d& pose,
+                const std::int64_t* anchor) {
+  const Eigen::Quaterniond q = Eigen::Quaterniond(pose.linear()).normalized();
+  const Eigen::Vector3d t = pose.translation();
+  char line[256];
+  int n = std::snprintf(line, sizeof line, "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f", timestamp,
+                        t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  if (anchor)
+    n += std::snprintf(line + n, sizeof line - n, " %lld", static_cast<long long>(*anchor));
+  out.append(line, static_cast<std::size_t>(n));
+  out.push_back('\n');
+}
+
+bool writeAll(int fd, const std::string& data) {
+  const char* p = data.data();
+  std::size_t size = data.size();
+  while (size > 0) {
+    const ssize_t n = ::write(fd, p, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    p += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+std::string failure(const std::string& file, const char* what) {
+  return file + ": " + what + ": " + std::strerror(errno);
+}
+
+}  // namespace
+
+TrajectoryStream::TrajectoryStream(std::string path, const PoseCorrections* corrections)
+    : path_(std::move(path)), spool_(path_ + ".anchored"), corrections_(corrections) {}
+
+TrajectoryStream::~TrajectoryStream() {
+  if (corrections_ && started_) std::remove(spool_.c_str());
+}
+
+void TrajectoryStream::record(double timestamp, const Eigen::Isometry3d& pose,
+                              std::int64_t anchor) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_.push_back({timestamp, pose, anchor});
+  ++recorded_;
+}
+
+std::size_t TrajectoryStream::recorded() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return recorded_;
+}
+
+bool TrajectoryStream::append(const std::string& file, const std::vector<Entry>& entries,
+                              bool with_anchor, bool truncate, std::string& error) {
+  std::string text;
+  if (truncate && !with_anchor) text = kHeader;
+  for (const Entry& e : entries)
+    formatLine(text, e.timestamp, e.pose, with_anchor ? &e.anchor : nullptr);
+  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (truncate ? O_TRUNC : O_APPEND);
+  const int fd = ::open(file.c_str(), flags, 0644);
+  if (fd < 0) {
+    error = failure(file, "cannot open");
+    return false;
+  }
+  const bool ok = writeAll(fd, text) && ::fdatasync(fd) == 0;
+  if (!ok) error = failure(file, "cannot write");
+  ::close(fd);
+  return ok;
+}
+
+bool TrajectoryStream::rewriteFromSpool(std::string& error) {
+  const PoseCorrections::Snapshot snapshot = corrections_->snapshot();
+  std::ifstream in(spool_);
+  if (!in) {
+    error = failure(spool_, "cannot read");
+    return false;
+  }
+  const std::string tmp = path_ + ".tmp-" + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    error = failure(tmp, "cannot create");
+    return false;
+  }
+  // In pieces: the spool of a long run is large and only the file should hold it whole.
+  std::string text = kHeader;
+  std::string line;
+  bool ok = true;
+  while (ok && std::getline(in, line)) {
+    std::istringstream fields(line);
+    double timestamp;
+    Eigen::Vector3d t;
+    Eigen::Quaterniond q;
+    long long anchor;
+    if (!(fields >> timestamp >> t.x() >> t.y() >> t.z() >> q.x() >> q.y() >> q.z() >> q.w() >>
+          anchor))
+      continue;  // a line cut short by a crash before this run's first persist
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = q.normalized().toRotationMatrix();
+    pose.translation() = t;
+    formatLine(text, timestamp, snapshot.apply(anchor, pose), nullptr);
+    if (text.size() > (1u << 16)) {
+      ok = writeAll(fd, text);
+      text.clear();
+    }
+  }
+  ok = ok && writeAll(fd, text) && ::fsync(fd) == 0;
+  if (!ok) error = failure(tmp, "cannot write");
+  ::close(fd);
+  if (ok && std::rename(tmp.c_str(), path_.c_str()) != 0) {
+    error = failure(path_, "cannot rename the temporary file into place");
+    ok = false;
+  }
+  if (!ok) std::remove(tmp.c_str());
+  return ok;
+}
+
+bool TrajectoryStream::persist(std::string& error) {
+  std::vector<Entry> entries;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    entries.swap(pending_);
+  }
+  const bool truncate = !started_;
+  const bool ok =
+      append(corrections_ ? spool_ : path_, entries, corrections_ != nullptr, truncate, error);
+  if (!ok) {
+    // Keep them for the next try, in order.
+    std::lock_guard<std::mutex> lock(mutex_);
+    entries.insert(entries.end(), pending_.begin(), pending_.end());
+    pending_.swap(entries);
+    return false;
+  }
+  started_ = true;
+  return !corrections_ || rewriteFromSpool(error);
+}
+
+}  // namespace rgbdmap
