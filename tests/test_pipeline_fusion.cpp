@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
@@ -75,6 +76,42 @@ TEST(PipelineFusion, FusedOnItsThreadGivesTheSameMapAsFusedInTurn) {
   EXPECT_EQ(threaded.keyframeTrajectory().size(), 6u);
   expectSameCloud(*sequential.snapshot(), *threaded.snapshot());
   EXPECT_GT(threaded.snapshot()->size(), 20000u);  // six fr1 frames: ~30k surface voxels
+}
+
+TEST(PipelineFusion, TheMapIsTheSameWhateverTheFusionThreads) {
+  Fixture f = loadFrames(6);
+  f.config.map_fusion_threads = 1;
+  RunStats one_stats, three_stats;
+  Mapper one(f.config, one_stats);
+  f.config.map_fusion_threads = 3;  // more than the CI machine's cores: tasks interleave
+  Mapper three(f.config, three_stats);
+  for (const Frame& frame : f.frames) {
+    one.fuse(frame);
+    three.fuse(frame);
+  }
+  expectSameCloud(*one.snapshot(), *three.snapshot());
+  EXPECT_GT(three.snapshot()->size(), 20000u);
+}
+
+TEST(WorkerPool, RunsEveryTaskOnceOnAllItsThreadsAndRethrowsTheFirstError) {
+  WorkerPool pool(3);
+  EXPECT_EQ(pool.threads(), 3);
+  for (int round = 0; round < 50; ++round) {  // runs back to back reuse the same threads
+    std::vector<std::atomic<int>> runs(997);
+    auto body = [&](std::size_t i) { runs[i].fetch_add(1); };
+    pool.run(runs.size(), body);
+    for (std::size_t i = 0; i < runs.size(); ++i) ASSERT_EQ(runs[i].load(), 1) << i;
+  }
+  auto failing = [](std::size_t i) {
+    if (i == 5) throw std::runtime_error("task 5 failed");
+  };
+  EXPECT_THROW(pool.run(100, failing), std::runtime_error);
+  std::atomic<int> after{0};
+  auto count = [&](std::size_t) { after.fetch_add(1); };
+  pool.run(10, count);  // still usable
+  EXPECT_EQ(after.load(), 10);
+  EXPECT_EQ(WorkerPool::resolve(0),
+            static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
 }
 
 TEST(PipelineFusion, BusySlotsRefuseALiveKeyframeAtOnceAndLoseNothingAccepted) {
