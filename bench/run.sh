@@ -256,12 +256,14 @@ python=/usr/bin/python3
 have_open3d=0
 "$python" -c 'import open3d' >/dev/null 2>&1 && have_open3d=1
 [ "$have_open3d" = 1 ] || note "Open3D: skipped (no python3-open3d; apt-get install python3-open3d)"
-run_open3d() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
+run_open3d() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty) THREADS(empty: its default)
   [ "$have_open3d" = 1 ] || return 0
-  local scenario="$1" seq="$2" n="$3" scene="$4" base="$work_dir/$1-open3d-every$3"
+  local scenario="$1" seq="$2" n="$3" scene="$4" threads="$5"
+  local base="$work_dir/$1-open3d-every$3${threads:+-threads$threads}"
   local poses="$work_dir/$1-rgbdmap-every1_keyframes.txt" yaml="$work_dir/$1-rgbdmap-every1.yaml"
   local label="open3d every $n"
   [ "$n" = 1 ] && label="open3d every frame"
+  [ -n "$threads" ] && label="$label, $threads thread"
   echo "== $scenario: $label" >&2
   if [ ! -f "$poses" ] || [ ! -f "$yaml" ]; then
     note "$scenario: $label skipped: no poses from rgbdmap's every-frame run"
@@ -270,8 +272,9 @@ run_open3d() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty)
   yaml_value() { awk -v key="$1:" '$1 == key { print $2; exit }' "$yaml"; }
   local t0 t1
   t0=$(now)
-  # One OpenMP thread: on a shared machine Open3D's spinning threads lose most of their time.
-  if ! OMP_NUM_THREADS=1 "$python" "$root/bench/open3d_tsdf.py" "$seq" "$poses" "$base.pcd" \
+  # Its default threads (every core, as rgbdmap's replay uses) is the fair comparison; one
+  # OpenMP thread shows what it does per core.
+  if ! env ${threads:+OMP_NUM_THREADS=$threads} "$python" "$root/bench/open3d_tsdf.py" "$seq" "$poses" "$base.pcd" \
       --every "$n" --fx "$(yaml_value fx)" --fy "$(yaml_value fy)" --cx "$(yaml_value cx)" \
       --cy "$(yaml_value cy)" --depth-scale "$(yaml_value depth_scale)" \
       --max-depth "$(yaml_value max_depth)" >"$base.json" 2>"$base.log"; then
@@ -294,8 +297,9 @@ run_scenario() {  # SCENARIO SEQUENCE EXACT_SCENE(or empty)
   run_original "$1" "$2" "$3"
   run_rgbdmap "$1" "$2" "$every_n" "$3"
   run_rgbdmap "$1" "$2" 1 "$3"
-  run_open3d "$1" "$2" 1 "$3"
-  run_open3d "$1" "$2" "$every_n" "$3"
+  run_open3d "$1" "$2" 1 "$3" ""
+  run_open3d "$1" "$2" 1 "$3" 1
+  run_open3d "$1" "$2" "$every_n" "$3" ""
 }
 
 # --- (a) TUM fr1/rpy, real frames -----------------------------------------------------------
@@ -470,7 +474,7 @@ awk -F '\t' '
   }
   { for (i = 1; i <= NF; ++i) field[NR, i] = $i; if ($13 == 1) base_row[$1] = NR; n = NR }
   END {
-    header = "scenario|system|frames|fused|wall s|frames/s|kf ms p50|kf ms p95|peak RSS MB|map points|F@1cm|mean mm|fps x|kf speed-up|RSS x"
+    header = "scenario|system|frames|fused|wall s|frames/s|kf ms p50|kf ms p95|peak RSS MB|map points|F@1cm|mean mm|fps x|kf speed-up|RSS x|MB/100 fr"
     cols = split(header, h, "|")
     for (c = 1; c <= cols; ++c) { cell[0, c] = h[c]; width[c] = length(h[c]) }
     for (r = 1; r <= n; ++r) {
@@ -484,6 +488,7 @@ awk -F '\t' '
       cell[r, 13] = b ? ratio(field[r, 6], field[b, 6], 0) : "-"
       cell[r, 14] = b ? ratio(field[r, 7], field[b, 7], 1) : "-"
       cell[r, 15] = b ? ratio(field[r, 9], field[b, 9], 0) : "-"
+      cell[r, 16] = ratio(field[r, 9], field[r, 3] / 100, 0)
       for (c = 1; c <= cols; ++c) if (length(cell[r, c]) > width[c]) width[c] = length(cell[r, c])
     }
     for (r = 0; r <= n; ++r) {
@@ -501,7 +506,9 @@ legend="frames: frames read; fused: keyframes integrated; wall s: whole process,
 script; frames/s and kf ms (per-keyframe integration time) as each program reports them;
 peak RSS: VmHWM. F@1cm / mean mm: map against the exact synthetic geometry (rgbdmap evaluate).
 Ratios are against the original method in the same scenario of this invocation: fps x = frames/s
-ratio, kf speed-up = original kf ms p50 / this kf ms p50, RSS x = peak RSS ratio.
+ratio, kf speed-up = original kf ms p50 / this kf ms p50, RSS x = peak RSS ratio; MB/100 fr = peak
+RSS per 100 frames read. Open3D runs with its default threads (every core, like rgbdmap's
+replay) and, in its own row, with one.
 The machine load (uptime) before and after the run is in the notes: compare ratios, not times."
 
 track_table="$work_dir/track_table.txt"
