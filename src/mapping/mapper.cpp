@@ -1,5 +1,6 @@
 #include "rgbdmap/mapping/mapper.hpp"
 
+#include "rgbdmap/mapping/mesh_extractor.hpp"
 #include "rgbdmap/mapping/point_merger.hpp"
 
 namespace rgbdmap {
@@ -39,6 +40,14 @@ void Mapper::closeSubmap() {
     map_.extract(points);
     submap.points = SurfaceCloud(points);
     closed_points_ += submap.points.size();
+    if (keep_meshes_) {
+      submap.mesh = extractMesh(map_);
+      // Kept for the whole run: without the slack push_back left.
+      submap.mesh.vertices.shrink_to_fit();
+      submap.mesh.colours.shrink_to_fit();
+      submap.mesh.triangles.shrink_to_fit();
+      closed_mesh_bytes_ += submap.mesh.memoryBytes();
+    }
     closed_.push_back(std::move(submap));
   }
   map_ = VoxelMap(voxel_size_, min_observations_);  // lets the TSDF's memory go
@@ -73,6 +82,17 @@ std::shared_ptr<MapCloud> Mapper::snapshot() const {
   }
   stats_.map_points.store(cloud->size());  // what is written
   return cloud;
+}
+
+std::shared_ptr<TriangleMesh> Mapper::meshSnapshot() const {
+  if (!corrections_ || (closed_.empty() && active_anchor_ < 0))
+    return std::make_shared<TriangleMesh>(extractMesh(map_));
+  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  auto mesh = std::make_shared<TriangleMesh>();
+  for (const Submap& submap : closed_)
+    mesh->append(submap.mesh, correction.of(submap.anchor).cast<float>());
+  mesh->append(extractMesh(map_), correction.of(active_anchor_).cast<float>());
+  return mesh;
 }
 
 }  // namespace rgbdmap

@@ -84,6 +84,18 @@ std::vector<CheckpointWriter::TrajectoryFile> trajectoryFiles(
   return files;
 }
 
+// The mesh written with a checkpoint (--mesh), extracted now on the fusion thread (the TSDF
+// changes with the next keyframe); none without --mesh.
+CheckpointWriter::MeshFile meshFile(const PipelineOutputs& outputs, const Mapper& mapper,
+                                    RunStats& stats) {
+  if (outputs.mesh_path.empty()) return {};
+  const auto start = std::chrono::steady_clock::now();
+  std::shared_ptr<const TriangleMesh> mesh = mapper.meshSnapshot();
+  stats.mesh_extract_latency.record(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return {std::move(mesh), outputs.mesh_path};
+}
+
 }  // namespace
 
 Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs)
@@ -104,6 +116,7 @@ int Pipeline::run(RunControl& control) {
   FrameTracker tracker(config_, makePoseProvider(config_, loop_closer.get()), stats_,
                        corrections.get());
   Mapper mapper(config_, stats_, corrections.get());
+  if (!outputs_.mesh_path.empty()) mapper.keepMeshes();
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config_), stats_.loop_closure ? "on" : "off");
@@ -115,6 +128,12 @@ int Pipeline::run(RunControl& control) {
                    source_->isLive() ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
   CheckpointWriter writer([this](const CheckpointWriter::Result& r) {
+    if (r.mesh_seconds > 0.0) stats_.mesh_write_latency.record(r.mesh_seconds);
+    if (r.ok && !outputs_.mesh_path.empty()) {
+      stats_.mesh_triangles.store(r.mesh_triangles);
+      spdlog::info("mesh: {} triangles written to {} in {:.2f} s", r.mesh_triangles,
+                   outputs_.mesh_path, r.mesh_seconds);
+    }
     if (r.ok) {
       stats_.checkpoints_written.fetch_add(1);
       spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
@@ -193,7 +212,8 @@ int Pipeline::run(RunControl& control) {
   auto checkpoint = [&] {
     auto frames = std::make_shared<const Trajectory>(tracker.trajectory());
     fusion.request(MapRequest::kCheckpoint, [this, &writer, frames](const Mapper& m) {
-      writer.submit(m.snapshot(), outputs_.map_path, trajectoryFiles(outputs_, m, frames));
+      writer.submit(m.snapshot(), outputs_.map_path, trajectoryFiles(outputs_, m, frames),
+                    meshFile(outputs_, m, stats_));
     });
   };
 
@@ -285,7 +305,8 @@ int Pipeline::run(RunControl& control) {
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
   writer.submit(
       final_map, outputs_.map_path,
-      trajectoryFiles(outputs_, mapper, std::make_shared<const Trajectory>(tracker.trajectory())));
+      trajectoryFiles(outputs_, mapper, std::make_shared<const Trajectory>(tracker.trajectory())),
+      meshFile(outputs_, mapper, stats_));
   publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
