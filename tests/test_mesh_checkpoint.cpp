@@ -81,12 +81,16 @@ TEST(MeshCheckpoint, LoopClosureMeshesEverySubmap) {
   ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
                           "/map.pcd --mesh " + dir + "/mesh.ply --rate max -q --no-render " +
                           "--set pose.source=odometry --set loop.submap_keyframes=5 " +
-                          "--set keyframe.every_n=2",
+                          "--set keyframe.every_n=2 --stats " + dir + "/stats.json",
                       &output),
             0)
       << output;
   const TriangleMesh mesh = readPly(dir + "/mesh.ply");
   EXPECT_GT(mesh.triangles.size(), 20000u);
+  // Closed submaps kept their meshes (and only they count here: the active one has a TSDF).
+  const std::string stats = test::readFile(dir + "/stats.json");
+  EXPECT_GT(test::jsonNumber(stats, "mesh_memory_mb"), 0.1) << stats;
+  EXPECT_NE(stats.find("\"loop_closure\": true"), std::string::npos) << stats;
 }
 
 TEST(MeshCheckpoint, UnwritableMeshIsReportedAndTheMapStillSaved) {

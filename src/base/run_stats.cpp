@@ -71,6 +71,7 @@ std::string RunStats::toJson() const {
       << (wall_seconds > 0 ? static_cast<double>(frames_processed) / wall_seconds : 0.0) << ",\n"
       << "  \"peak_rss_mb\": " << peak_rss_mb << ",\n"
       << "  \"mesh_triangles\": " << mesh_triangles << ",\n"
+      << "  \"mesh_memory_mb\": " << mesh_memory_mb << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);
   latency("queue_wait", queue_latency, false);

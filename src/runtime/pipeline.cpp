@@ -317,6 +317,7 @@ int Pipeline::run(RunControl& control) {
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
   }
   stats_.peak_rss_mb = peakRssMb();
+  stats_.mesh_memory_mb = static_cast<double>(mapper.meshMemoryBytes()) / (1024.0 * 1024.0);
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);
