@@ -1,6 +1,7 @@
 #include "rgbdmap/mapping/mapper.hpp"
 
 #include "rgbdmap/mapping/mesh_extractor.hpp"
+#include "rgbdmap/mapping/mesh_merger.hpp"
 #include "rgbdmap/mapping/point_merger.hpp"
 
 namespace rgbdmap {
@@ -88,11 +89,12 @@ std::shared_ptr<TriangleMesh> Mapper::meshSnapshot() const {
   if (!corrections_ || (closed_.empty() && active_anchor_ < 0))
     return std::make_shared<TriangleMesh>(extractMesh(map_));
   const PoseCorrections::Snapshot correction = corrections_->snapshot();
-  auto mesh = std::make_shared<TriangleMesh>();
-  for (const Submap& submap : closed_)
-    mesh->append(submap.mesh, correction.of(submap.anchor).cast<float>());
-  mesh->append(extractMesh(map_), correction.of(active_anchor_).cast<float>());
-  return mesh;
+  MeshMerger merger(voxel_size_);
+  // Newest first: the active submap, then back through the closed ones.
+  merger.add(extractMesh(map_), correction.of(active_anchor_));
+  for (auto submap = closed_.rbegin(); submap != closed_.rend(); ++submap)
+    merger.add(submap->mesh, correction.of(submap->anchor));
+  return std::make_shared<TriangleMesh>(merger.take());
 }
 
 }  // namespace rgbdmap

@@ -42,8 +42,8 @@ class Mapper {
   // no mesh does not pay for them.
   void keepMeshes() { keep_meshes_ = true; }
   // The map as a triangle mesh (marching cubes on the TSDF, see extractMesh()). With loop closure:
-  // each submap's mesh moved by its anchor's latest correction, concatenated (where submaps
-  // overlap, a surface can show twice, within about a voxel).
+  // each submap's mesh moved by its anchor's latest correction and joined by MeshMerger (newest
+  // first, where submaps overlap the newer one's triangles are kept).
   std::shared_ptr<TriangleMesh> meshSnapshot() const;
   std::size_t meshMemoryBytes() const { return closed_mesh_bytes_; }  // the closed submaps'
 
