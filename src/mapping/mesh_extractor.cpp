@@ -77,6 +77,24 @@ TriangleMesh extractMesh(const VoxelMap& map, const MeshOptions& options) {
   index.reserve(map.blockCount());
   for (std::uint32_t b = 0; b < map.blockCount(); ++b)
     index.emplace(blockKey(map.block(b).origin / kEdge), b);
+  // Blocks with a voxel near enough to the zero level to end a trusted crossing. Most blocks of
+  // the band around a surface have none, and a block's cells only reach into the blocks at +1
+  // along each axis: when none of those 8 has one, the block is skipped without gathering.
+  std::vector<bool> near(map.blockCount(), false);
+  for (std::uint32_t b = 0; b < map.blockCount(); ++b)
+    for (const VoxelMap::Voxel& v : map.block(b).voxels)
+      if (v.weight > 0.0f && std::abs(v.sdf) < max_near) {
+        near[b] = true;
+        break;
+      }
+  auto nearAround = [&](std::uint32_t b) {
+    const Eigen::Vector3i coords = map.block(b).origin / kEdge;
+    for (int i = 0; i < 8; ++i) {
+      const auto it = index.find(blockKey(coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
+      if (it != index.end() && near[it->second]) return true;
+    }
+    return false;
+  };
 
   // Vertex of each crossed edge, keyed by its lower voxel's id and the edge's axis.
   KeyIndex welded;
@@ -105,6 +123,7 @@ TriangleMesh extractMesh(const VoxelMap& map, const MeshOptions& options) {
 
   Neighbourhood n;
   for (std::uint32_t b = 0; b < map.blockCount(); ++b) {
+    if (!nearAround(b)) continue;
     gather(map, index, b, n);
     const Eigen::Vector3i origin = map.block(b).origin;
     for (int z = 0; z < kEdge; ++z) {
