@@ -1,6 +1,9 @@
 // The mesh (--mesh): marching cubes on exact signed distance fields (a sphere, a plane), where
 // it must not put faces (unobserved voxels, a sign jump), and the PLY it is written as.
 #include <gtest/gtest.h>
+#include <pcl/PolygonMesh.h>
+#include <pcl/conversions.h>
+#include <pcl/io/ply_io.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -218,6 +221,31 @@ TEST(PlyFile, RoundTripIsExactAndWritesAreByteIdentical) {
     ASSERT_EQ(loaded.triangles[i], mesh.triangles[i]);
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST(PlyFile, AnotherReaderSeesTheSameMesh) {
+  // PCL's PLY parser (its own implementation, as MeshLab, Open3D and Blender have theirs) reads
+  // the file as a polygon mesh with the same vertices, colours and triangles.
+  const std::string dir = test::freshDir();
+  const TriangleMesh mesh = extractMesh(sphereMap());
+  std::string error;
+  ASSERT_TRUE(writePlyAtomically(mesh, dir + "/sphere.ply", error)) << error;
+  pcl::PolygonMesh loaded;
+  ASSERT_EQ(pcl::io::loadPLYFile(dir + "/sphere.ply", loaded), 0);
+  ASSERT_EQ(loaded.polygons.size(), mesh.triangles.size());
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    ASSERT_EQ(loaded.polygons[i].vertices.size(), 3u);
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(loaded.polygons[i].vertices[k], mesh.triangles[i][k]);
+  }
+  pcl::PointCloud<pcl::PointXYZRGB> points;
+  pcl::fromPCLPointCloud2(loaded.cloud, points);
+  ASSERT_EQ(points.size(), mesh.vertices.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ASSERT_EQ(points[i].getVector3fMap(), mesh.vertices[i]);
+    ASSERT_EQ(points[i].r, mesh.colours[i][0]);
+    ASSERT_EQ(points[i].g, mesh.colours[i][1]);
+    ASSERT_EQ(points[i].b, mesh.colours[i][2]);
+  }
 }
 
 TEST(PlyFile, EmptyMeshIsAValidPly) {
