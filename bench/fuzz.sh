@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every parser of outside input with libFuzzer (not part of CI): TUM lists and ground
-# truth, trajectory files, config YAML and --set, the PCD/PLY maps `render` and `evaluate` read.
+# truth, trajectory files, config YAML and --set, the PCD/PLY maps `render` and `evaluate` read,
+# the PLY meshes (--mesh) `render` and `view` read.
 # Each target runs for --seconds with ASan + UBSan; any crash, hang, leak or sanitizer report
 # fails the run and leaves the input in <build>/crashes/ (turn it into a regression test).
 #
@@ -32,7 +33,7 @@ fi
 [ -n "$fuzzer_lib" ] && [ -f "$fuzzer_lib" ] || {
   echo "fuzz.sh: libFuzzer is missing (apt-get install libclang-rt-14-dev)" >&2; exit 2; }
 
-targets="tum_lists trajectory config map_file"
+targets="tum_lists trajectory config map_file mesh_file"
 [ -n "$only" ] && targets="$only"
 
 mkdir -p "$build_dir"
@@ -45,7 +46,7 @@ cmake --build "$build_dir" -j2 --target $(for t in $targets; do printf 'fuzz_%s 
 data=../shared/data
 seeds="$build_dir/seeds"
 rm -rf "$seeds"
-mkdir -p "$seeds"/{tum_lists,trajectory,config,map_file} "$build_dir/crashes"
+mkdir -p "$seeds"/{tum_lists,trajectory,config,map_file,mesh_file} "$build_dir/crashes"
 for seq in "$data"/tum/*/; do
   name=$(basename "$seq")
   { head -c 3000 "$seq/rgb.txt"; printf '\001'; head -c 3000 "$seq/depth.txt"; printf '\001';
@@ -59,6 +60,13 @@ seed_map="$build_dir/seed_map.pcd"
 printf 'VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n0 0 1 4.2e6\n1 2 3 0\n' >"$seed_map"
 { printf '\000'; cat "$seed_map"; } >"$seeds/map_file/ascii.pcd"
 { printf '\001'; printf 'ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 1\n1 2 3\n'; } >"$seeds/map_file/ascii.ply"
+
+# A binary PLY mesh as --mesh writes it: 3 vertices (float xyz, uchar rgb), one triangle.
+{ printf 'ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n'
+  printf 'property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n'
+  printf 'element face 1\nproperty list uchar int vertex_indices\nend_header\n'
+  head -c 45 /dev/zero
+  printf '\003\000\000\000\000\001\000\000\000\002\000\000\000'; } >"$seeds/mesh_file/triangle.ply"
 
 # An allocation larger than memory throws std::bad_alloc, as in a release build (a PCD header
 # may declare any number of points; the reader turns that into a message), instead of an ASan

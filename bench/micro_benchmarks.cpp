@@ -17,6 +17,7 @@
 #include "rgbdmap/mapping/depth_filter.hpp"
 #include "rgbdmap/mapping/depth_smoother.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
+#include "rgbdmap/mapping/mesh_extractor.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
@@ -206,6 +207,19 @@ void BM_ExtractSnapshot(benchmark::State& state) {
   state.counters["points"] = static_cast<double>(cloud.size());
 }
 BENCHMARK(BM_ExtractSnapshot)->Unit(benchmark::kMillisecond);
+
+// The same map as a triangle mesh (--mesh): marching cubes over every block, on the fusion side.
+void BM_ExtractMesh(benchmark::State& state) {
+  Fixture& f = fixture();
+  rgbdmap::TriangleMesh mesh;
+  for (auto _ : state) {
+    mesh = rgbdmap::extractMesh(*f.scene);
+    benchmark::DoNotOptimize(mesh.triangles.data());
+  }
+  state.counters["triangles"] = static_cast<double>(mesh.triangles.size());
+  state.counters["points"] = static_cast<double>(f.scene->pointCount());
+}
+BENCHMARK(BM_ExtractMesh)->Unit(benchmark::kMillisecond);
 
 // The whole keyframe path (filter, smooth, project, fuse) into the scene map.
 void BM_KeyframeIntegrate(benchmark::State& state) {

@@ -337,10 +337,29 @@ make_synth() {  # DEST FRAMES
   echo "synthetic sequence of $2 frames generated in $(elapsed "$t0" "$t1") s: $1" >>"$notes"
 }
 
+# The mesh (--mesh) of a sequence fused every frame: marching cubes on the fusion thread and the
+# PLY write on the writer thread, per save (the final one: max), as a note under the table.
+mesh_note() {  # SCENARIO SEQUENCE
+  [ "$run_mapping" = 1 ] || return 0
+  "$rgbdmap" --help 2>/dev/null | grep -q -- "--mesh" || { note "mesh: this rgbdmap has no --mesh"; return 0; }
+  local base="$work_dir/$1-rgbdmap-mesh"
+  echo "== $1: rgbdmap every frame --mesh" >&2
+  if ! "$rgbdmap" --source "tum:$2" --out "$base.pcd" --mesh "$base.ply" --rate max -q --no-render \
+      --stats "$base.json" --set keyframe.every_n=1 >"$base.log" 2>&1; then
+    note "$1: rgbdmap --mesh failed (see $base.log)"
+    failures=$((failures + 1))
+    return 0
+  fi
+  note "$1: mesh of $(json_number "$base.json" map_points) map points: $(json_number "$base.json" mesh_triangles) triangles, extraction $(json_number "$base.json" max_ms mesh_extract) ms, PLY write $(json_number "$base.json" max_ms mesh_write) ms (largest save)"
+}
+
 if [ "$have_synth" = 1 ]; then
   n="$synth_frames"
   [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
-  if make_synth "$work_dir/synth" "$n"; then run_scenario synth "$work_dir/synth" "$work_dir/synth"; fi
+  if make_synth "$work_dir/synth" "$n"; then
+    run_scenario synth "$work_dir/synth" "$work_dir/synth"
+    mesh_note synth "$work_dir/synth"
+  fi
   if [ "$long_frames" -gt 0 ] && [ "$run_mapping" = 1 ]; then
     n="$long_frames"
     [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"

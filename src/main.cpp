@@ -49,10 +49,11 @@ class SignalThread {
   // From here on SIGUSR1 asks the pipeline for a checkpoint of `map_path` and a stop drains and
   // saves. Returns false when a stop came first: then nothing is mapped. One lock orders the two,
   // so a stop during start-up never ends in a saved map (its message said none would be).
-  bool mappingStarts(const std::string& map_path) {
+  bool mappingStarts(const std::string& map_path, const std::string& mesh_path = "") {
     std::lock_guard<std::mutex> lock(mutex_);
     if (control_.stop.load()) return false;
     map_path_ = map_path;
+    mesh_path_ = mesh_path;
     mapping_ = true;
     return true;
   }
@@ -95,6 +96,8 @@ class SignalThread {
         if (control_.stop.exchange(true) && sig == SIGINT) {
           if (mapping) {
             std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
+            if (!mesh_path_.empty())
+              std::remove((mesh_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
             for (const char* trajectory : {"_keyframes.txt.tmp", "_trajectory.txt.tmp"})
               std::remove((stem(map_path_) + trajectory).c_str());
           }
@@ -113,6 +116,7 @@ class SignalThread {
   rgbdmap::RunControl& control_;
   std::mutex mutex_;  // orders mappingStarts() and the handling of a signal
   std::string map_path_;
+  std::string mesh_path_;
   bool mapping_ = false;
   std::atomic<bool> done_{false};
   std::thread thread_;
@@ -125,6 +129,7 @@ struct MapOptions {
   std::string rate;
   std::vector<std::string> sets;
   std::string stats_file;
+  std::string mesh;
   std::string viewer = "auto";
   bool no_render = false;
   bool quiet = false;
@@ -151,16 +156,16 @@ std::string configurationTable(rgbdmap::Config& config) {
 
 // The map's folder is created if missing and must be writable: better to refuse at once than to
 // find out at the first checkpoint, after mapping for a while.
-void checkOutputFolder(const std::string& map_path) {
+void checkOutputFolder(const std::string& map_path, const std::string& option = "--out") {
   namespace fs = std::filesystem;
   const fs::path folder = fs::path(map_path).parent_path();
   if (folder.empty()) return;
   std::error_code ec;
   if (!fs::is_directory(folder, ec) && !fs::create_directories(folder, ec))
-    throw rgbdmap::InputError("--out " + map_path + ": cannot create the folder " +
+    throw rgbdmap::InputError(option + " " + map_path + ": cannot create the folder " +
                               folder.string() + (ec ? " (" + ec.message() + ")" : ""));
   if (::access(folder.c_str(), W_OK) != 0)
-    throw rgbdmap::InputError("--out " + map_path + ": the folder " + folder.string() +
+    throw rgbdmap::InputError(option + " " + map_path + ": the folder " + folder.string() +
                               " is not writable");
 }
 
@@ -190,6 +195,7 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
     return 2;
   }
   checkOutputFolder(o.out);
+  if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string& s : o.sets) {
@@ -212,10 +218,11 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   outputs.trajectory_path = stem(o.out) + "_keyframes.txt";
   outputs.frame_trajectory_path = stem(o.out) + "_trajectory.txt";
   outputs.config_path = stem(o.out) + ".yaml";
+  outputs.mesh_path = o.mesh;
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
-  if (!signals.mappingStarts(o.out)) {
+  if (!signals.mappingStarts(o.out, o.mesh)) {
     stoppedDuringStartUp(control);
     return 0;
   }
@@ -264,6 +271,8 @@ int main(int argc, char** argv) {
   app.add_option("-r,--rate", o.rate,
                  "replay speed: 1 = as recorded, max = as fast as possible (lossless)");
   app.add_option("--set", o.sets, "override a config key: --set map.voxel_size=0.005 (repeatable)");
+  app.add_option("--mesh", o.mesh,
+                 "also write the map as a coloured triangle mesh (binary PLY), with every save");
   app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
   app.add_option("--viewer", o.viewer, "live window: auto (when a display is available) | none")
       ->check(CLI::IsMember({"auto", "none"}))

@@ -3,10 +3,12 @@
 #include <sys/stat.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/runtime/ply_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/map_renderer.hpp"
 
@@ -108,14 +110,90 @@ cv::Mat MapRenderer::render(const MapCloud& cloud, const Trajectory& trajectory)
   return image;
 }
 
+cv::Mat MapRenderer::render(const TriangleMesh& mesh, const Trajectory& trajectory) const {
+  cv::Mat image(height, width, CV_8UC3, cv::Scalar(40, 40, 40));
+  cv::Mat zbuffer(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+  MapCloud corners;  // the view is chosen as for the vertices as a cloud
+  corners.resize(mesh.vertices.size());
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    corners[i].getVector3fMap() = mesh.vertices[i];
+  const Eigen::Isometry3d view = chooseView(corners, trajectory, fov_degrees);
+  const Eigen::Isometry3d world_to_view = view.inverse();
+  const double f = 0.5 * width / std::tan(fov_degrees * M_PI / 360.0);
+  const double cx = 0.5 * width, cy = 0.5 * height;
+  std::vector<Eigen::Vector3d> camera(mesh.vertices.size());  // in the view's frame
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    camera[i] = world_to_view * mesh.vertices[i].cast<double>();
+  for (const TriangleMesh::Triangle& t : mesh.triangles) {
+    const Eigen::Vector3d &a = camera[t[0]], &b = camera[t[1]], &c = camera[t[2]];
+    if (a.z() <= 0.05 || b.z() <= 0.05 || c.z() <= 0.05) continue;  // no clipping: dropped
+    const Eigen::Vector3d normal = (b - a).cross(c - a);
+    if (normal.norm() < 1e-12) continue;
+    const double shade = 0.3 + 0.7 * std::abs(normal.normalized().dot(a.normalized()));
+    double u[3], v[3];
+    const Eigen::Vector3d* corner[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+      u[k] = f * corner[k]->x() / corner[k]->z() + cx;
+      v[k] = f * corner[k]->y() / corner[k]->z() + cy;
+    }
+    const double area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+    if (std::abs(area) < 1e-12) continue;
+    const int u0 = std::max(0, static_cast<int>(std::floor(std::min({u[0], u[1], u[2]}))));
+    const int u1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({u[0], u[1], u[2]}))));
+    const int v0 = std::max(0, static_cast<int>(std::floor(std::min({v[0], v[1], v[2]}))));
+    const int v1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({v[0], v[1], v[2]}))));
+    for (int y = v0; y <= v1; ++y) {
+      for (int x = u0; x <= u1; ++x) {
+        const double px = x + 0.5, py = y + 0.5;  // pixel centres, barycentric weights:
+        const double w0 = ((u[1] - px) * (v[2] - py) - (u[2] - px) * (v[1] - py)) / area;
+        const double w1 = ((u[2] - px) * (v[0] - py) - (u[0] - px) * (v[2] - py)) / area;
+        const double w2 = 1.0 - w0 - w1;
+        if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+        const float z = static_cast<float>(w0 * a.z() + w1 * b.z() + w2 * c.z());
+        float& depth = zbuffer.at<float>(y, x);
+        if (z >= depth) continue;
+        depth = z;
+        cv::Vec3b& out = image.at<cv::Vec3b>(y, x);
+        for (int channel = 0; channel < 3; ++channel) {  // BGR from RGB
+          const double mixed = w0 * mesh.colours[t[0]][2 - channel] +
+                               w1 * mesh.colours[t[1]][2 - channel] +
+                               w2 * mesh.colours[t[2]][2 - channel];
+          out[channel] = cv::saturate_cast<std::uint8_t>(mixed * shade);
+        }
+      }
+    }
+  }
+  for (std::size_t i = 1; i < trajectory.size(); ++i) {
+    const Eigen::Vector3d p = world_to_view * trajectory[i - 1].pose.translation();
+    const Eigen::Vector3d q = world_to_view * trajectory[i].pose.translation();
+    if (p.z() > 0.05 && q.z() > 0.05)
+      cv::line(image, cv::Point2d(f * p.x() / p.z() + cx, f * p.y() / p.z() + cy),
+               cv::Point2d(f * q.x() / q.z() + cx, f * q.y() / q.z() + cy), cv::Scalar(0, 0, 255),
+               2, cv::LINE_AA);
+  }
+  cv::putText(image, std::to_string(mesh.triangles.size()) + " triangles", {12, height - 14},
+              cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
+  return image;
+}
+
 bool renderMapFile(const std::string& map_path, const std::string& trajectory_path,
                    const std::string& png_path, const MapRenderer& renderer, std::string& error) {
   MapCloud cloud;
+  TriangleMesh mesh;
   try {
-    cloud = loadMapFile(map_path);  // checks the header first: PCL crashes on some garbage
-  } catch (const std::exception& e) {
-    error = e.what();
-    return false;
+    // A binary PLY with faces (--mesh) is a mesh; anything else is read as points.
+    if (map_path.size() > 4 && map_path.compare(map_path.size() - 4, 4, ".ply") == 0)
+      mesh = readPly(map_path);
+  } catch (const std::exception&) {
+    mesh = TriangleMesh();  // e.g. an ASCII PLY: PCL's reader below says what is wrong
+  }
+  if (mesh.empty()) {
+    try {
+      cloud = loadMapFile(map_path);  // checks the header first: PCL crashes on some garbage
+    } catch (const std::exception& e) {
+      error = e.what();
+      return false;
+    }
   }
   Trajectory trajectory;
   if (!trajectory_path.empty() && exists(trajectory_path)) {
@@ -127,7 +205,9 @@ bool renderMapFile(const std::string& map_path, const std::string& trajectory_pa
     }
   }
   try {
-    if (!cv::imwrite(png_path, renderer.render(cloud, trajectory))) {
+    const cv::Mat image =
+        mesh.empty() ? renderer.render(cloud, trajectory) : renderer.render(mesh, trajectory);
+    if (!cv::imwrite(png_path, image)) {
       error = png_path + ": cannot write image";
       return false;
     }
@@ -139,13 +219,14 @@ bool renderMapFile(const std::string& map_path, const std::string& trajectory_pa
 }
 
 void addRenderCommand(CLI::App& app, Command& selected) {
-  auto* cmd = app.add_subcommand("render", "render a map (PCD/PLY) to a PNG picture, headless");
+  auto* cmd = app.add_subcommand("render",
+                                 "render a map (PCD/PLY) or mesh (PLY) to a PNG picture, headless");
   struct Options {
     std::string map, trajectory, out;
     MapRenderer renderer;
   };
   auto o = std::make_shared<Options>();
-  cmd->add_option("map", o->map, "map file (.pcd or .ply)")->required();
+  cmd->add_option("map", o->map, "map file (.pcd or .ply) or mesh (.ply, --mesh)")->required();
   cmd->add_option("-o,--out", o->out, "PNG to write (default: the map's name with .png)");
   cmd->add_option("-t,--trajectory", o->trajectory, "TUM trajectory to draw and to place the view");
   cmd->add_option("--width", o->renderer.width, "image width")->check(CLI::Range(64, 8192));

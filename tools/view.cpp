@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/runtime/ply_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/run_viewer.hpp"
 #include "rgbdmap/viewer/display_check.hpp"
@@ -73,14 +74,24 @@ void addViewCommand(CLI::App& app, Command& selected) {
   auto* cmd = app.add_subcommand(
       "view", "open a saved map with its trajectory (MAP_keyframes.txt, MAP_trajectory.txt)");
   auto map = std::make_shared<std::string>();
-  cmd->add_option("map", *map, "map file (.pcd or .ply)")->required();
+  cmd->add_option("map", *map, "map file (.pcd or .ply) or mesh (.ply, --mesh)")->required();
   cmd->callback([map, &selected] {
     selected = [map] {
       std::string why;
       if (!displayAvailable(why))
         throw InputError("rgbdmap view: no display to open a window on (" + why +
                          "); `rgbdmap render` draws a map to a PNG without one");
-      auto cloud = std::make_shared<MapCloud>(loadMapFile(*map));
+      // A PLY with faces (--mesh) is shown as a mesh; anything else as points.
+      std::shared_ptr<TriangleMesh> mesh;
+      if (map->size() > 4 && map->compare(map->size() - 4, 4, ".ply") == 0) {
+        try {
+          mesh = std::make_shared<TriangleMesh>(readPly(*map));
+        } catch (const InputError&) {
+          mesh.reset();  // e.g. an ASCII PLY: PCL's reader below says what is wrong
+        }
+        if (mesh && mesh->empty()) mesh.reset();
+      }
+      auto cloud = mesh ? nullptr : std::make_shared<MapCloud>(loadMapFile(*map));
       Eigen::Isometry3d first = Eigen::Isometry3d::Identity();
       const std::vector<TrajectoryPoint> trajectory = savedTrajectory(*map, first);
       ViewerOptions options;
@@ -89,7 +100,10 @@ void addViewCommand(CLI::App& app, Command& selected) {
       options.follow = false;
       Viewer viewer(options);
       viewer.mailbox().publishTrajectory(trajectory, first);
-      viewer.mailbox().publishMap(cloud);
+      if (mesh)
+        viewer.mailbox().publishMesh(mesh);
+      else
+        viewer.mailbox().publishMap(cloud);
       viewer.waitUntilClosed();
       return 0;
     };

@@ -70,6 +70,8 @@ std::string RunStats::toJson() const {
       << "  \"frames_per_second\": "
       << (wall_seconds > 0 ? static_cast<double>(frames_processed) / wall_seconds : 0.0) << ",\n"
       << "  \"peak_rss_mb\": " << peak_rss_mb << ",\n"
+      << "  \"mesh_triangles\": " << mesh_triangles << ",\n"
+      << "  \"mesh_memory_mb\": " << mesh_memory_mb << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);
   latency("queue_wait", queue_latency, false);
@@ -80,7 +82,9 @@ std::string RunStats::toJson() const {
   latency("fuse", fuse_latency, false);
   latency("integrate", integrate_latency, false);
   latency("loop", loop_latency, false);
-  latency("optimise", optimise_latency, true);
+  latency("optimise", optimise_latency, false);
+  latency("mesh_extract", mesh_extract_latency, false);
+  latency("mesh_write", mesh_write_latency, true);
   out << "  }\n}\n";
   return out.str();
 }

@@ -1,5 +1,7 @@
 #include "rgbdmap/mapping/mapper.hpp"
 
+#include "rgbdmap/mapping/mesh_extractor.hpp"
+#include "rgbdmap/mapping/mesh_merger.hpp"
 #include "rgbdmap/mapping/point_merger.hpp"
 
 namespace rgbdmap {
@@ -46,6 +48,14 @@ void Mapper::closeSubmap() {
     map_.extract(points);
     submap.points = SurfaceCloud(points);
     closed_points_ += submap.points.size();
+    if (keep_meshes_) {
+      submap.mesh = extractMesh(map_);
+      // Kept for the whole run: without the slack push_back left.
+      submap.mesh.vertices.shrink_to_fit();
+      submap.mesh.colours.shrink_to_fit();
+      submap.mesh.triangles.shrink_to_fit();
+      closed_mesh_bytes_ += submap.mesh.memoryBytes();
+    }
     closed_.push_back(std::move(submap));
   }
   map_ = VoxelMap(voxel_size_, min_observations_);  // lets the TSDF's memory go
@@ -83,6 +93,18 @@ std::shared_ptr<MapCloud> Mapper::snapshot() const {
   }
   stats_.map_points.store(cloud->size());  // what is written
   return cloud;
+}
+
+std::shared_ptr<TriangleMesh> Mapper::meshSnapshot() const {
+  if (!corrections_ || (closed_.empty() && active_anchor_ < 0))
+    return std::make_shared<TriangleMesh>(extractMesh(map_));
+  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  MeshMerger merger(voxel_size_);
+  // Newest first: the active submap, then back through the closed ones.
+  merger.add(extractMesh(map_), correction.of(active_anchor_));
+  for (auto submap = closed_.rbegin(); submap != closed_.rend(); ++submap)
+    merger.add(submap->mesh, correction.of(submap->anchor));
+  return std::make_shared<TriangleMesh>(merger.take());
 }
 
 }  // namespace rgbdmap

@@ -11,6 +11,8 @@
 #include <cstring>
 #include <vector>
 
+#include "rgbdmap/runtime/ply_file.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -38,8 +40,9 @@ std::string describeErrno(int error) {
   }
 }
 
-// Writes all of `size` bytes; false with errno set on any failure (a full disk, a quota, a
-// file-size limit: SIGXFSZ is ignored, so the write fails with EFBIG instead of killing us).
+}  // namespace
+
+// SIGXFSZ is ignored, so a file-size limit fails the write with EFBIG instead of killing us.
 bool writeAll(int fd, const char* data, std::size_t size) {
   while (size > 0) {
     const ssize_t n = ::write(fd, data, size);
@@ -52,6 +55,8 @@ bool writeAll(int fd, const char* data, std::size_t size) {
   }
   return true;
 }
+
+namespace {
 
 // Binary PCD with fields x y z rgb (16 bytes a point), written with plain write() calls so that
 // every failure comes back as an errno (PCL's writer maps the file, where a full disk is a
@@ -81,7 +86,8 @@ bool writePcd(const MapCloud& cloud, int fd) {
 
 }  // namespace
 
-bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error) {
+bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
+                         std::string& error) {
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   const auto fail = [&](const std::string& what, int fd) {
     const int saved = errno;
@@ -92,7 +98,7 @@ bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::str
   };
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return fail("cannot create", -1);
-  if (!writePcd(cloud, fd)) return fail("cannot write", fd);
+  if (!write(fd)) return fail("cannot write", fd);
   if (::fsync(fd) != 0) return fail("cannot fsync", fd);  // ENOSPC may only show here (NFS)
   if (::close(fd) != 0) return fail("cannot close", -1);
   if (std::rename(tmp.c_str(), path.c_str()) != 0) return fail("cannot rename into place", -1);
@@ -103,6 +109,11 @@ bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::str
     ::close(folder);
   }
   return true;
+}
+
+bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error) {
+  return writeFileAtomically(
+      path, [&](int fd) { return writePcd(cloud, fd); }, error);
 }
 
 CheckpointWriter::CheckpointWriter(Callback on_done)
@@ -118,12 +129,13 @@ CheckpointWriter::~CheckpointWriter() {
 }
 
 void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
-                              std::vector<TrajectoryFile> trajectories) {
+                              std::vector<TrajectoryFile> trajectories, MeshFile mesh) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = std::move(cloud);
     pending_path_ = path;
     pending_trajectories_ = std::move(trajectories);
+    pending_mesh_ = std::move(mesh);
   }
   wake_.notify_all();
 }
@@ -132,6 +144,19 @@ CheckpointWriter::Result CheckpointWriter::flush() {
   std::unique_lock<std::mutex> lock(mutex_);
   idle_.wait(lock, [this] { return !pending_ && !busy_; });
   return last_;
+}
+
+void CheckpointWriter::writeMesh(const MeshFile& mesh, Result& result) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string error;
+  if (writePlyAtomically(*mesh.mesh, mesh.path, error)) {
+    result.mesh_triangles = mesh.mesh->triangles.size();
+  } else {
+    result.error += std::string(result.error.empty() ? "" : "; ") + "mesh " + error;
+    result.ok = false;
+  }
+  result.mesh_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void CheckpointWriter::run() {
@@ -143,6 +168,8 @@ void CheckpointWriter::run() {
     const std::string path = pending_path_;
     const std::vector<TrajectoryFile> trajectories = std::move(pending_trajectories_);
     pending_trajectories_.clear();
+    const MeshFile mesh = std::move(pending_mesh_);
+    pending_mesh_ = {};
     pending_.reset();
     busy_ = true;
     lock.unlock();
@@ -167,6 +194,7 @@ void CheckpointWriter::run() {
         result.ok = false;
       }
     }
+    if (mesh.mesh) writeMesh(mesh, result);
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     (result.ok ? written_ : failed_).fetch_add(1);

@@ -76,6 +76,18 @@ std::shared_ptr<TrajectoryStream> streamTo(const std::string& path,
   return path.empty() ? nullptr : std::make_shared<TrajectoryStream>(path, corrections);
 }
 
+// The mesh written with a checkpoint (--mesh), extracted now on the fusion thread (the TSDF
+// changes with the next keyframe); none without --mesh.
+CheckpointWriter::MeshFile meshFile(const PipelineOutputs& outputs, const Mapper& mapper,
+                                    RunStats& stats) {
+  if (outputs.mesh_path.empty()) return {};
+  const auto start = std::chrono::steady_clock::now();
+  std::shared_ptr<const TriangleMesh> mesh = mapper.meshSnapshot();
+  stats.mesh_extract_latency.record(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return {std::move(mesh), outputs.mesh_path};
+}
+
 }  // namespace
 
 Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs)
@@ -108,6 +120,7 @@ int Pipeline::run(RunControl& control) {
   FrameTracker tracker(config_, makePoseProvider(config_, loop_closer.get()), stats_,
                        frame_file.get());
   Mapper mapper(config_, stats_, corrections.get(), keyframe_file.get());
+  if (!outputs_.mesh_path.empty()) mapper.keepMeshes();
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config_), stats_.loop_closure ? "on" : "off");
@@ -119,6 +132,12 @@ int Pipeline::run(RunControl& control) {
                    source_->isLive() ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
   CheckpointWriter writer([this](const CheckpointWriter::Result& r) {
+    if (r.mesh_seconds > 0.0) stats_.mesh_write_latency.record(r.mesh_seconds);
+    if (r.ok && !outputs_.mesh_path.empty()) {
+      stats_.mesh_triangles.store(r.mesh_triangles);
+      spdlog::info("mesh: {} triangles written to {} in {:.2f} s", r.mesh_triangles,
+                   outputs_.mesh_path, r.mesh_seconds);
+    }
     if (r.ok) {
       stats_.checkpoints_written.fetch_add(1);
       spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
@@ -196,7 +215,8 @@ int Pipeline::run(RunControl& control) {
   // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
     fusion.request(MapRequest::kCheckpoint, [this, &writer, &trajectory_files](const Mapper& m) {
-      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files);
+      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
+                    meshFile(outputs_, m, stats_));
     });
   };
 
@@ -286,7 +306,8 @@ int Pipeline::run(RunControl& control) {
 
   // Final save, through the writer so it is ordered after any checkpoint in flight.
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
-  writer.submit(final_map, outputs_.map_path, trajectory_files);
+  writer.submit(final_map, outputs_.map_path, trajectory_files,
+                meshFile(outputs_, mapper, stats_));
   publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
@@ -297,6 +318,7 @@ int Pipeline::run(RunControl& control) {
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
   }
   stats_.peak_rss_mb = peakRssMb();
+  stats_.mesh_memory_mb = static_cast<double>(mapper.meshMemoryBytes()) / (1024.0 * 1024.0);
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);

@@ -86,6 +86,29 @@ void setPoints(vtkPolyData* poly, const std::vector<Eigen::Vector3f>& points,
   poly->Modified();
 }
 
+// A triangle mesh with its vertex colours as VTK polydata.
+void setMesh(vtkPolyData* poly, const TriangleMesh& mesh) {
+  const auto n = static_cast<vtkIdType>(mesh.vertices.size());
+  vtkNew<vtkPoints> vtk_points;
+  vtk_points->SetDataTypeToFloat();
+  vtk_points->SetNumberOfPoints(n);
+  for (vtkIdType i = 0; i < n; ++i) vtk_points->SetPoint(i, mesh.vertices[i].data());
+  vtkNew<vtkCellArray> triangles;
+  for (const TriangleMesh::Triangle& t : mesh.triangles) {
+    const vtkIdType ids[3] = {t[0], t[1], t[2]};
+    triangles->InsertNextCell(3, ids);
+  }
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(n);
+  for (vtkIdType i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) rgb->SetValue(3 * i + c, mesh.colours[i][c]);
+  poly->SetPoints(vtk_points);
+  poly->SetPolys(triangles);
+  poly->GetPointData()->SetScalars(rgb);
+  poly->Modified();
+}
+
 void setPolyline(vtkPolyData* poly, const std::vector<Eigen::Vector3f>& points) {
   vtkNew<vtkPoints> vtk_points;
   for (const auto& p : points) vtk_points->InsertNextPoint(p.x(), p.y(), p.z());
@@ -185,6 +208,9 @@ class Scene {
     trajectory_actor_ = makeActor(trajectory_, 1.0, 0.55, 0.0, 2.0f, false);
     keyframe_actor_ = makeActor(keyframes_, 1.0, 0.9, 0.2, 6.0f, false);
     frustum_actor_ = makeActor(frustum_, 0.2, 1.0, 0.3, 2.0f, false);
+    mesh_actor_ = makeActor(mesh_, 1, 1, 1, 1.0f, true);
+    mesh_actor_->GetProperty()->SetLighting(true);  // shaded faces show the shape
+    map_renderer_->AddActor(mesh_actor_);
     for (vtkActor* a :
          {map_actor_.Get(), trajectory_actor_.Get(), keyframe_actor_.Get(), frustum_actor_.Get()})
       map_renderer_->AddActor(a);
@@ -269,6 +295,14 @@ class Scene {
         map_renderer_->ResetCamera();
       }
     }
+    if (u.mesh) {
+      setMesh(mesh_, *u.mesh);
+      mesh_triangles_ = u.mesh->triangles.size();
+      if (!options_.follow && !map_shown_) {
+        if (has_pose_) followCamera();
+        map_renderer_->ResetCamera();
+      }
+    }
     if (follow_ && has_pose_) followCamera();
     updateStatus();
     dirty_ = true;
@@ -282,6 +316,10 @@ class Scene {
     if (!announce_.empty()) {
       spdlog::info("viewer: on screen: {}", announce_);  // after drawing: tests wait for it
       announce_.clear();
+    }
+    if (!map_shown_ && mesh_triangles_ > 0) {
+      map_shown_ = true;
+      spdlog::info("viewer: map on screen (a mesh of {} triangles)", mesh_triangles_);
     }
     if (!map_shown_ && !cloud_.points.empty()) {
       map_shown_ = true;
@@ -394,8 +432,10 @@ class Scene {
   vtkNew<vtkRenderer> map_renderer_;
   vtkNew<vtkRenderer> status_renderer_;
   vtkNew<vtkTextActor> status_text_;
-  vtkNew<vtkPolyData> map_, trajectory_, keyframes_, frustum_;
-  vtkSmartPointer<vtkActor> map_actor_, trajectory_actor_, keyframe_actor_, frustum_actor_;
+  vtkNew<vtkPolyData> map_, trajectory_, keyframes_, frustum_, mesh_;
+  vtkSmartPointer<vtkActor> map_actor_, trajectory_actor_, keyframe_actor_, frustum_actor_,
+      mesh_actor_;
+  std::size_t mesh_triangles_ = 0;
   bool follow_;
   ImagePane color_pane_;
   ImagePane depth_pane_;

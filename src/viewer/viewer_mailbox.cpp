@@ -29,6 +29,12 @@ void ViewerMailbox::publishMap(std::shared_ptr<const MapCloud> map) {
   changed_ = true;
 }
 
+void ViewerMailbox::publishMesh(std::shared_ptr<const TriangleMesh> mesh) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_.mesh = std::move(mesh);
+  changed_ = true;
+}
+
 void ViewerMailbox::publishTrajectory(const std::vector<TrajectoryPoint>& points,
                                       const Eigen::Isometry3d& last_pose) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -41,6 +47,7 @@ void ViewerMailbox::publishTrajectory(const std::vector<TrajectoryPoint>& points
 bool ViewerMailbox::take(ViewerUpdate& update) {
   update.new_points.clear();
   update.map.reset();
+  update.mesh.reset();
   update.has_images = update.has_pose = update.has_status = false;
   std::lock_guard<std::mutex> lock(mutex_);
   if (!changed_) return false;

@@ -69,6 +69,12 @@ struct RunStats {
   LatencyHistogram queue_latency;      // capture-to-mapping: time a frame waited in the queue
   LatencyHistogram loop_latency;       // loop thread, per keyframe: graph, place recognition
   LatencyHistogram optimise_latency;   // pose graph optimisation, per accepted loop closure
+  // --mesh only: marching cubes per map save (fusion thread, then the final save), and writing
+  // the PLY (writer thread).
+  LatencyHistogram mesh_extract_latency;
+  LatencyHistogram mesh_write_latency;
+  std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
+  double mesh_memory_mb = 0.0;  // the closed submaps' meshes kept at the end (loop closure)
 
   double wall_seconds = 0.0;
   double peak_rss_mb = 0.0;

@@ -9,6 +9,7 @@
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/surface_cloud.hpp"
+#include "rgbdmap/mapping/triangle_mesh.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 #include "rgbdmap/tracking/anchored_trajectory.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
@@ -40,10 +41,21 @@ class Mapper {
   Trajectory keyframeTrajectory() const { return keyframes_.resolve(corrections_); }
   std::size_t submaps() const { return closed_.size() + 1; }
 
+  // Keeps what meshSnapshot() needs: with loop closure, each submap is meshed when it closes
+  // (its TSDF is let go then) and its mesh kept. Call before the first fuse(); a run that writes
+  // no mesh does not pay for them.
+  void keepMeshes() { keep_meshes_ = true; }
+  // The map as a triangle mesh (marching cubes on the TSDF, see extractMesh()). With loop closure:
+  // each submap's mesh moved by its anchor's latest correction and joined by MeshMerger (newest
+  // first, where submaps overlap the newer one's triangles are kept).
+  std::shared_ptr<TriangleMesh> meshSnapshot() const;
+  std::size_t meshMemoryBytes() const { return closed_mesh_bytes_; }  // the closed submaps'
+
  private:
   struct Submap {
     std::int64_t anchor = -1;
     SurfaceCloud points;  // in the odometry frame
+    TriangleMesh mesh;    // likewise (only with keepMeshes())
   };
   bool startsSubmap(const Frame& keyframe) const;
   void closeSubmap();
@@ -59,6 +71,8 @@ class Mapper {
   int active_keyframes_ = 0;
   std::vector<Submap> closed_;
   std::size_t closed_points_ = 0;
+  bool keep_meshes_ = false;
+  std::size_t closed_mesh_bytes_ = 0;
   AnchoredTrajectory keyframes_;
   PoseSink* keyframe_sink_;  // keyframes_ or the caller's
   RunStats& stats_;

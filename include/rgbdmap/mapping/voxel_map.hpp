@@ -62,6 +62,8 @@ class VoxelMap {
   std::uint32_t minObservations() const { return min_observations_; }
   // Blocks in use (pruned ones excluded).
   std::size_t blockCount() const { return blocks_.size() - free_.size(); }
+  // Block indices run over [0, blockSlots()); a slot whose block was pruned is not in_use.
+  std::size_t blockSlots() const { return blocks_.size(); }
   std::size_t memoryBytes() const;
   // Points extract() writes. Counting is left until asked for: after each integration it would
   // revisit the blocks updated and their neighbours, about a tenth of the fusion time.

@@ -11,6 +11,7 @@
 
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/runtime/trajectory_stream.hpp"
+#include "rgbdmap/mapping/triangle_mesh.hpp"
 
 namespace rgbdmap {
 
@@ -19,6 +20,12 @@ namespace rgbdmap {
 // Returns false with `error` naming the path and the system error (EFBIG, ENOSPC, EDQUOT,
 // EROFS, ...) when anything fails; the temp file is removed and the destination left as it was.
 bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error);
+// The same for any format: `write` writes the whole file to `fd` (false with errno set).
+bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
+                         std::string& error);
+// Writes all of `size` bytes; false with errno set on any failure (a full disk, a quota, a
+// file-size limit).
+bool writeAll(int fd, const char* data, std::size_t size);
 
 // A background thread that writes map snapshots while mapping goes on. Only the newest pending
 // snapshot is kept: if mapping produces snapshots faster than the disk takes them, older
@@ -31,16 +38,23 @@ class CheckpointWriter {
     std::string error;
     std::size_t points = 0;
     double seconds = 0.0;
+    std::size_t mesh_triangles = 0;  // in the mesh written with the map (none: 0)
+    double mesh_seconds = 0.0;       // writing it (part of `seconds`)
   };
   using Callback = std::function<void(const Result&)>;
   // A trajectory written beside the map in the same checkpoint: what it recorded since the last.
   using TrajectoryFile = std::shared_ptr<TrajectoryStream>;
+  // A mesh written beside the map in the same checkpoint (binary PLY, atomically like the map).
+  struct MeshFile {
+    std::shared_ptr<const TriangleMesh> mesh;  // null: no mesh
+    std::string path;
+  };
 
   explicit CheckpointWriter(Callback on_done = nullptr);
   ~CheckpointWriter();  // finishes a pending write, then stops
 
   void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
-              std::vector<TrajectoryFile> trajectories = {});
+              std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {});
   // Waits until nothing is pending or being written. Returns the last result.
   Result flush();
   std::uint64_t written() const { return written_.load(); }
@@ -48,6 +62,7 @@ class CheckpointWriter {
 
  private:
   void run();
+  void writeMesh(const MeshFile& mesh, Result& result);
 
   Callback on_done_;
   std::mutex mutex_;
@@ -55,6 +70,7 @@ class CheckpointWriter {
   std::shared_ptr<const MapCloud> pending_;
   std::string pending_path_;
   std::vector<TrajectoryFile> pending_trajectories_;
+  MeshFile pending_mesh_;
   bool busy_ = false;
   bool stop_ = false;
   Result last_;

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "rgbdmap/mapping/triangle_mesh.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
 
 namespace rgbdmap {
@@ -27,7 +28,8 @@ struct ViewerUpdate {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // newest camera pose
   bool has_status = false;
   PublishedStatus status;
-  std::shared_ptr<const MapCloud> map;  // newest map, null when unchanged
+  std::shared_ptr<const MapCloud> map;       // newest map, null when unchanged
+  std::shared_ptr<const TriangleMesh> mesh;  // a saved mesh to show (`view MESH.ply`), or null
 };
 
 // Hands the mapping thread's frames and maps to the viewer thread. The mapping thread only
@@ -39,6 +41,9 @@ class ViewerMailbox : public MapPublisher {
   void publishFrame(const Frame& frame, const PublishedStatus& status) override;
   bool wantsMap() const override { return map_taken_.load(); }
   void publishMap(std::shared_ptr<const MapCloud> map) override;
+
+  // A saved mesh, drawn as shaded triangles instead of the map's points.
+  void publishMesh(std::shared_ptr<const TriangleMesh> mesh);
 
   // For a saved map: the whole trajectory at once.
   void publishTrajectory(const std::vector<TrajectoryPoint>& points,

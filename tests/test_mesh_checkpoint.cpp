@@ -1,0 +1,118 @@
+// `--mesh` end to end through the real binary: the mesh is written with the final save and with
+// every checkpoint (SIGUSR1 here), with and without loop closure, and a mesh that cannot be
+// written is reported while the map is still saved.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <filesystem>
+
+#include "rgbdmap/runtime/ply_file.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+
+TEST(MeshCheckpoint, FinalSaveWritesAMeshThatLoads) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
+                          "/map.pcd --mesh " + dir + "/mesh.ply --rate max -q --no-render " +
+                          "--stats " + dir + "/stats.json",
+                      &output),
+            0)
+      << output;
+  const TriangleMesh mesh = readPly(dir + "/mesh.ply");
+  EXPECT_GT(mesh.triangles.size(), 20000u);
+  const std::string stats = test::readFile(dir + "/stats.json");
+  EXPECT_EQ(test::jsonNumber(stats, "mesh_triangles"), static_cast<double>(mesh.triangles.size()));
+  EXPECT_NE(output.find("mesh: " + std::to_string(mesh.triangles.size()) +
+                        " triangles written to " + dir + "/mesh.ply"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(stats.find("\"mesh_write\": {\"count\": 1,"), std::string::npos) << stats;
+  // The picture of a mesh is drawn as triangles.
+  ASSERT_EQ(test::run(test::binary() + " render " + dir + "/mesh.ply", &output), 0) << output;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/mesh.png"));
+}
+
+TEST(MeshCheckpoint, Sigusr1WritesTheMeshWhileMapping) {
+  const std::string dir = test::freshDir();
+  test::Process p(
+      {test::binary(), "--source", "tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100"),
+       "--out", dir + "/map.pcd", "--mesh", dir + "/mesh.ply", "--rate", "0.5", "--no-render",
+       "--set", "checkpoint.every_keyframes=0", "--set", "checkpoint.every_seconds=0"},
+      dir + "/log.txt");
+  ASSERT_GT(p.pid(), 0);
+  ASSERT_TRUE(test::waitUntil(
+      [&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 60));
+  // Ask until a checkpoint's mesh has triangles (the first keyframe may take a while).
+  std::size_t asked = 0, seen = 0;
+  ASSERT_TRUE(test::waitUntil(
+      [&] {
+        const std::string log = test::readFile(dir + "/log.txt");
+        std::size_t meshes = 0, at = 0;
+        while ((at = log.find("mesh: ", at)) != std::string::npos) {
+          ++meshes;
+          seen = std::stoul(log.substr(at + 6));
+          at += 6;
+        }
+        if (seen > 1000) return true;
+        if (meshes == asked) {
+          p.signal(SIGUSR1);
+          ++asked;
+        }
+        return false;
+      },
+      60))
+      << test::readFile(dir + "/log.txt");
+  const bool still_running = p.running();
+  EXPECT_EQ(readPly(dir + "/mesh.ply").triangles.size(), seen);
+  EXPECT_TRUE(still_running) << "the checkpoint should come while mapping goes on";
+  EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
+  EXPECT_GT(readPly(dir + "/mesh.ply").triangles.size(), seen / 2);
+}
+
+TEST(MeshCheckpoint, LoopClosureMeshesEverySubmap) {
+  // Tracked poses close loops, so the map is made of submaps; the mesh covers them all.
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
+                          "/map.pcd --mesh " + dir + "/mesh.ply --rate max -q --no-render " +
+                          "--set pose.source=odometry --set loop.submap_keyframes=5 " +
+                          "--set keyframe.every_n=2 --stats " + dir + "/stats.json",
+                      &output),
+            0)
+      << output;
+  const TriangleMesh mesh = readPly(dir + "/mesh.ply");
+  EXPECT_GT(mesh.triangles.size(), 20000u);
+  // Closed submaps kept their meshes (and only they count here: the active one has a TSDF).
+  const std::string stats = test::readFile(dir + "/stats.json");
+  EXPECT_GT(test::jsonNumber(stats, "mesh_memory_mb"), 0.1) << stats;
+  EXPECT_NE(stats.find("\"loop_closure\": true"), std::string::npos) << stats;
+}
+
+TEST(MeshCheckpoint, UnwritableMeshIsReportedAndTheMapStillSaved) {
+  const std::string dir = test::freshDir();
+  std::filesystem::create_directory(dir + "/mesh.ply");  // a folder where the mesh should go
+  std::string output;
+  EXPECT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
+                          "/map.pcd --mesh " + dir + "/mesh.ply --rate max -q --no-render " +
+                          "--set checkpoint.every_keyframes=10",
+                      &output),
+            1)
+      << output;
+  EXPECT_NE(output.find("checkpoint failed, mapping goes on: mesh " + dir + "/mesh.ply: cannot " +
+                        "rename into place"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("final map not saved: mesh " + dir + "/mesh.ply"), std::string::npos)
+      << output;
+  EXPECT_GT(test::loadMap(dir + "/map.pcd").size(), 1000u);
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+}  // namespace
+}  // namespace rgbdmap
