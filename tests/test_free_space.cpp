@@ -9,6 +9,7 @@
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
+#include "rgbdmap/sim/camera_path.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -20,18 +21,10 @@ struct Patch {
   double half1 = 0, half2 = 0;
 };
 
-// Camera-to-world pose of a camera at `eye` looking at `target`, world z up (TUM camera axes:
-// x right, y down, z forward).
+// Camera-to-world pose of a camera at `eye` looking at `target`, world z up.
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d forward = (target - eye).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear().col(0) = right;
-  pose.linear().col(1) = down;
-  pose.linear().col(2) = forward;
-  pose.translation() = eye;
-  return pose;
+  const Eigen::Vector3d d = target - eye;
+  return handheldPose(eye, std::atan2(d.y(), d.x()), std::atan2(d.z(), d.head<2>().norm()), 0.0);
 }
 
 CameraIntrinsics kinect() {

@@ -9,6 +9,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
+
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -26,21 +30,6 @@ void formatLine(std::string& out, double timestamp, const Eigen::Isometry3d& pos
     n += std::snprintf(line + n, sizeof line - n, " %lld", static_cast<long long>(*anchor));
   out.append(line, static_cast<std::size_t>(n));
   out.push_back('\n');
-}
-
-bool writeAll(int fd, const std::string& data) {
-  const char* p = data.data();
-  std::size_t size = data.size();
-  while (size > 0) {
-    const ssize_t n = ::write(fd, p, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return false;
-    }
-    p += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
 }
 
 std::string failure(const std::string& file, const char* what) {
@@ -80,7 +69,7 @@ bool TrajectoryStream::append(const std::string& file, const std::vector<Entry>&
     error = failure(file, "cannot open");
     return false;
   }
-  const bool ok = writeAll(fd, text) && ::fdatasync(fd) == 0;
+  const bool ok = writeAll(fd, text.data(), text.size()) && ::fdatasync(fd) == 0;
   if (!ok) error = failure(file, "cannot write");
   ::close(fd);
   return ok;
@@ -93,43 +82,33 @@ bool TrajectoryStream::rewriteFromSpool(std::string& error) {
     error = failure(spool_, "cannot read");
     return false;
   }
-  const std::string tmp = path_ + ".tmp-" + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    error = failure(tmp, "cannot create");
-    return false;
-  }
-  // In pieces: the spool of a long run is large and only the file should hold it whole.
-  std::string text = kHeader;
-  std::string line;
-  bool ok = true;
-  while (ok && std::getline(in, line)) {
-    std::istringstream fields(line);
-    double timestamp;
-    Eigen::Vector3d t;
-    Eigen::Quaterniond q;
-    long long anchor;
-    if (!(fields >> timestamp >> t.x() >> t.y() >> t.z() >> q.x() >> q.y() >> q.z() >> q.w() >>
-          anchor))
-      continue;  // a line cut short by a crash before this run's first persist
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = q.normalized().toRotationMatrix();
-    pose.translation() = t;
-    formatLine(text, timestamp, snapshot.apply(anchor, pose), nullptr);
-    if (text.size() > (1u << 16)) {
-      ok = writeAll(fd, text);
-      text.clear();
-    }
-  }
-  ok = ok && writeAll(fd, text) && ::fsync(fd) == 0;
-  if (!ok) error = failure(tmp, "cannot write");
-  ::close(fd);
-  if (ok && std::rename(tmp.c_str(), path_.c_str()) != 0) {
-    error = failure(path_, "cannot rename the temporary file into place");
-    ok = false;
-  }
-  if (!ok) std::remove(tmp.c_str());
-  return ok;
+  return writeFileAtomically(
+      path_,
+      [&](int fd) {
+        // In pieces: the spool of a long run is large and only the file should hold it whole.
+        std::string text = kHeader;
+        std::string line;
+        while (std::getline(in, line)) {
+          std::istringstream fields(line);
+          double timestamp;
+          Eigen::Vector3d t;
+          Eigen::Quaterniond q;
+          long long anchor;
+          if (!(fields >> timestamp >> t.x() >> t.y() >> t.z() >> q.x() >> q.y() >> q.z() >>
+                q.w() >> anchor))
+            continue;  // a line cut short by a crash before this run's first persist
+          Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+          pose.linear() = q.normalized().toRotationMatrix();
+          pose.translation() = t;
+          formatLine(text, timestamp, snapshot.apply(anchor, pose), nullptr);
+          if (text.size() > (1u << 16)) {
+            if (!writeAll(fd, text.data(), text.size())) return false;
+            text.clear();
+          }
+        }
+        return writeAll(fd, text.data(), text.size());
+      },
+      error);
 }
 
 bool TrajectoryStream::persist(std::string& error) {
