@@ -13,6 +13,7 @@ packages=(
   # tools its tests drive (roscore, rosbag, rostopic).
   ros-core-dev libroscpp-dev librosbag-dev libsensor-msgs-dev libgeometry-msgs-dev
   libstd-srvs-dev libtf2-ros-dev ros-core python3-rosbag python3-rostopic
+  python3-sensor-msgs python3-geometry-msgs python3-std-srvs
 )
 missing=()
 for p in "${packages[@]}"; do

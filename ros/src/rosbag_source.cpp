@@ -70,6 +70,13 @@ RosbagSource::RosbagSource(const std::string& path, const Config& config)
     view_ = std::make_unique<rosbag::View>(
         bag_, rosbag::TopicQuery(std::vector<std::string>{topics_.color, topics_.depth}));
     at_ = view_->begin();
+  } catch (const rosbag::BagUnindexedException& e) {
+    throw InputError(path + ": cannot read as a ROS bag (" + e.what() +
+                     "); `rosbag reindex " + path + "` rebuilds the index of a recording cut short");
+  } catch (const rosbag::BagIOException& e) {
+    throw InputError(path + ": cannot read as a ROS bag (" + e.what() +
+                     "); if it is a recording cut short, `rosbag reindex " + path +
+                     "` rebuilds its index");
   } catch (const rosbag::BagException& e) {
     throw InputError(path + ": cannot read as a ROS bag (" + e.what() + ")");
   }

@@ -14,6 +14,8 @@ namespace {
 constexpr std::size_t kReadyPairs = 4;
 // Without frames for this long read() reports a timeout (the pipeline checkpoints and waits).
 constexpr double kFrameTimeout = 2.0;
+// Without new images for this long, the images still waiting for a partner are paired.
+constexpr double kSettleTimeout = 0.5;
 // How long the first images may wait for their camera_info.
 constexpr double kCameraInfoGrace = 3.0;
 
@@ -143,8 +145,25 @@ void TopicSource::skip(const std::string& reason, const std::string& detail) {
   ++skipped_;
 }
 
+bool TopicSource::flushPairs() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Pair pair;
+  while (pairer_.next(pair, true)) {
+    ++counts_.paired;
+    ready_.push_back(std::move(pair));
+  }
+  return !ready_.empty();
+}
+
 ReadStatus TopicSource::read(Frame& frame) {
-  if (!waitForPair(kFrameTimeout)) return ReadStatus::kTimeout;
+  // The newest images settle into pairs only when later ones arrive: when the camera pauses (a
+  // bag played to its end) they are paired after a short wait instead of never.
+  if (!waitForPair(kSettleTimeout) && !stop_.load() && !flushPairs() &&
+      !waitForPair(kFrameTimeout - kSettleTimeout)) {
+    // A stop while waiting is the end of the stream, not a camera that went away.
+    return stop_.load() ? ReadStatus::kEnd : ReadStatus::kTimeout;
+  }
+  if (stop_.load() && !waitForPair(0)) return ReadStatus::kEnd;
   Pair pair;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -175,7 +194,7 @@ ReadStatus TopicSource::read(Frame& frame) {
   return ReadStatus::kFrame;
 }
 
-bool TopicSource::reconnect() { return waitForPair(1.0); }
+bool TopicSource::reconnect() { return waitForPair(1.0) || flushPairs(); }
 
 std::string TopicSource::describe() const {
   return "ros:" + color_topic_ + " + " + depth_topic_ + " (intrinsics from " + intrinsics_from_ +

@@ -96,14 +96,15 @@ int convert(const std::string& folder, const std::string& out, const std::string
   bag.setCompression(rosbag::compression::LZ4);
   const std::string rgb_frame = "/openni_rgb_optical_frame";
   const std::string depth_frame = "/openni_depth_optical_frame";
-  std::uint32_t seq = 0;
+  // One seq counter per topic, as a camera driver's publishers keep them.
+  std::uint32_t rgb_seq = 0, depth_seq = 0;
   sensor_msgs::Image msg;
   cv::Mat raw, converted;
   for (const Item& item : items) {
     const ros::Time stamp = rosTime(item.time);
     raw = cv::imread(item.listed->path, item.is_depth ? cv::IMREAD_UNCHANGED : cv::IMREAD_COLOR);
     if (raw.empty()) throw InputError(item.listed->path + ": cannot read image");
-    msg.header.seq = seq++;
+    msg.header.seq = item.is_depth ? depth_seq++ : rgb_seq++;
     msg.header.stamp = stamp;
     if (item.is_depth) {
       if (raw.type() != CV_16UC1) throw InputError(item.listed->path + ": not 16-bit depth");

@@ -67,6 +67,7 @@ class TopicSource : public FrameSource {
   void onCameraInfo(const sensor_msgs::CameraInfo::ConstPtr& msg);
   void takePairs();  // with mutex_ held
   bool waitForPair(double timeout_s);
+  bool flushPairs();  // pairs what is left, as at the end of a stream
   void skip(const std::string& reason, const std::string& detail);
 
   const Config config_;
