@@ -11,6 +11,8 @@
 namespace rgbdmap {
 namespace {
 
+constexpr std::size_t kMaxPoses = 256;
+
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -56,9 +58,9 @@ void RosPublisher::publishFrame(const Frame& frame, const PublishedStatus& /*sta
   if (!frame.has_pose) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    pose_ = frame.pose;
-    pose_stamp_ = frame.timestamp;
-    pose_pending_ = true;
+    if (poses_.size() >= kMaxPoses) poses_.pop_front();
+    poses_.push_back({frame.timestamp, frame.pose});
+    last_stamp_ = frame.timestamp;
   }
   wake_.notify_one();
 }
@@ -77,26 +79,25 @@ void RosPublisher::publishMap(std::shared_ptr<const MapCloud> map) {
 void RosPublisher::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    wake_.wait(lock, [&] { return stop_ || pose_pending_ || map_; });
-    if (pose_pending_) {
-      const double stamp = pose_stamp_;
-      const Eigen::Isometry3d pose = pose_;
-      pose_pending_ = false;
+    wake_.wait(lock, [&] { return stop_ || !poses_.empty() || map_; });
+    while (!poses_.empty()) {
+      const StampedPose p = poses_.front();
+      poses_.pop_front();
       lock.unlock();
-      sendPose(stamp, pose);
+      sendPose(p.stamp, p.pose);
       lock.lock();
     }
     if (map_) {
       const std::shared_ptr<const MapCloud> map = std::move(map_);
       map_.reset();
-      const double stamp = pose_stamp_;
+      const double stamp = last_stamp_;
       lock.unlock();
       sendMap(*map, stamp);
       next_map_at_.store(now() + options_.map_interval);
       map_pending_.store(false);
       lock.lock();
     }
-    if (stop_ && !pose_pending_ && !map_) break;
+    if (stop_ && poses_.empty() && !map_) break;
   }
 }
 

@@ -10,8 +10,14 @@
 namespace rgbdmap {
 namespace {
 
-// Pairs kept for the capture thread; more means mapping is behind and the oldest go.
-constexpr std::size_t kReadyPairs = 4;
+// Pairs kept for the capture thread (a quarter second at 30 Hz, before the pipeline's own queue):
+// more means mapping is behind, and the oldest go.
+constexpr std::size_t kReadyPairs = 8;
+// Until mapping starts reading (its start-up takes a moment once the first images are in), pairs
+// are kept up to ten seconds' worth: a short recording must not lose its first second.
+constexpr std::size_t kStartupPairs = 300;
+// Images a subscriber queues while the callback thread is not scheduled (a loaded machine).
+constexpr std::uint32_t kSubscriberQueue = 10;
 // Without frames for this long read() reports a timeout (the pipeline checkpoints and waits).
 constexpr double kFrameTimeout = 2.0;
 // Without new images for this long, the images still waiting for a partner are paired.
@@ -29,8 +35,8 @@ TopicSource::TopicSource(ros::NodeHandle& nh, const Config& config, const std::a
     : config_(config), stop_(stop), camera_(config.camera) {
   // Large images: a short subscriber queue (the pairer holds a window of its own), no Nagle.
   const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();
-  color_sub_ = nh.subscribe(kColorTopic, 5, &TopicSource::onColor, this, hints);
-  depth_sub_ = nh.subscribe(kDepthTopic, 5, &TopicSource::onDepth, this, hints);
+  color_sub_ = nh.subscribe(kColorTopic, kSubscriberQueue, &TopicSource::onColor, this, hints);
+  depth_sub_ = nh.subscribe(kDepthTopic, kSubscriberQueue, &TopicSource::onDepth, this, hints);
   info_sub_ = nh.subscribe(kCameraInfoTopic, 1, &TopicSource::onCameraInfo, this);
   color_topic_ = color_sub_.getTopic();
   depth_topic_ = depth_sub_.getTopic();
@@ -77,7 +83,7 @@ void TopicSource::takePairs() {
   while (pairer_.next(pair)) {
     ++counts_.paired;
     ready_.push_back(std::move(pair));
-    if (ready_.size() > kReadyPairs) {
+    if (ready_.size() > (reading_ ? kReadyPairs : kStartupPairs)) {
       ready_.pop_front();
       ++counts_.buffer_dropped;
     }
@@ -167,6 +173,7 @@ ReadStatus TopicSource::read(Frame& frame) {
   Pair pair;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    reading_ = true;
     pair = std::move(ready_.front());
     ready_.pop_front();
   }

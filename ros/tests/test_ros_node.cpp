@@ -62,11 +62,21 @@ std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
   const std::string p = ns.empty() ? "" : "/" + ns;
   std::vector<std::string> args = {"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers"};
   if (!ns.empty()) args.push_back("--prefix=" + p);
+  args.push_back(bag);  // before --topics, which takes every argument after it
   for (const char* t : {"--topics", "/camera/rgb/image_color", "/camera/depth/image",
                         "/camera/rgb/camera_info"})
     args.push_back(t);
-  args.push_back(bag);
   return std::make_unique<Process>(args, log);
+}
+
+// The node took every image played: after the bag ends its last images are paired, and the
+// camera is reported silent (the pipeline checkpoints and waits for it).
+bool waitUntilSilent(const std::string& node_log) {
+  return waitUntil(
+      [&] {
+        return readFile(node_log).find("camera stopped delivering frames") != std::string::npos;
+      },
+      30);
 }
 
 // Checks the node's end-of-run counters: nothing lost on the way, at most 1% dropped.
@@ -120,7 +130,6 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
       << readFile(node_log);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30);
   EXPECT_TRUE(got.map_intact.load());
-  EXPECT_GE(got.poses.load(), 90u);
 
   // ~save_map answers once the map is written.
   std_srvs::Trigger save;
@@ -132,12 +141,18 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
   EXPECT_TRUE(snapshot.response.success) << snapshot.response.message;
 
   // Ctrl-C: the final map, exit 0.
+  ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
   const std::uint64_t maps_before = got.maps.load();
   node.signal(SIGINT);
   ASSERT_EQ(node.wait(60), 0) << readFile(node_log);
   EXPECT_NE(readFile(node_log).find("map: "), std::string::npos);
   EXPECT_GT(loadMap(dir_ + "/map.pcd").size(), 100000u);
   EXPECT_GT(got.maps.load(), maps_before) << "the final map was not published";
+  // A pose for every tracked frame, but those of the first frames may go out before this
+  // consumer's connection to the new publisher is made (ROS drops them: the topic is not latched).
+  const double tracked = jsonNumber(readFile(dir_ + "/stats.json"), "frames_tracked");
+  EXPECT_LE(static_cast<double>(got.poses.load()), tracked);
+  EXPECT_GE(static_cast<double>(got.poses.load()), 0.85 * tracked);
   expectFewDrops(dir_ + "/stats.json", 100);
 }
 
@@ -163,6 +178,8 @@ TEST_F(RosNode, TwoRobotsAndAConsumerOnOneMaster) {
   std_srvs::Trigger save;
   ASSERT_TRUE(ros::service::call("/robot2/rgbdmap/save_map", save));
   EXPECT_TRUE(save.response.success) << save.response.message;
+  ASSERT_TRUE(waitUntilSilent(dir_ + "/robot1/node.log"));
+  ASSERT_TRUE(waitUntilSilent(dir_ + "/robot2/node.log"));
   node1.signal(SIGINT);
   node2.signal(SIGINT);
   ASSERT_EQ(node1.wait(60), 0) << readFile(dir_ + "/robot1/node.log");

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -47,9 +48,13 @@ class RosPublisher : public MapPublisher {
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;
-  bool pose_pending_ = false;
-  double pose_stamp_ = 0;
-  Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
+  struct StampedPose {
+    double stamp;
+    Eigen::Isometry3d pose;
+  };
+  // Every frame's pose goes out (a planner wants them all); bounded, should ROS stall.
+  std::deque<StampedPose> poses_;
+  double last_stamp_ = 0;
   std::shared_ptr<const MapCloud> map_;
   std::atomic<bool> map_pending_{false};
   std::atomic<double> next_map_at_{0.0};  // steady-clock seconds

@@ -81,6 +81,7 @@ class TopicSource : public FrameSource {
   std::condition_variable arrived_;
   StampPairer<ImagePtr> pairer_;
   std::deque<Pair> ready_;
+  bool reading_ = false;  // mapping has started taking pairs
   std::optional<sensor_msgs::CameraInfo> info_;
   std::string camera_frame_;
   Counts counts_;
