@@ -154,12 +154,13 @@ int runNode(RunControl& control, SignalThread& signals) {
   }
   if (config.pose_source == "auto") config.pose_source = "odometry";
   if (config.pose_source == "groundtruth")
-    throw InputError("pose.source=groundtruth: a ROS camera has no ground truth; use odometry "
-                     "or trajectory");
+    throw InputError(
+        "pose.source=groundtruth: a ROS camera has no ground truth; use odometry "
+        "or trajectory");
 
   RosPublisher::Options publish;
   publish.map_frame = settings.map_frame;
-  publish.camera_frame = !settings.camera_frame.empty() ? settings.camera_frame
+  publish.camera_frame = !settings.camera_frame.empty()  ? settings.camera_frame
                          : !topics.cameraFrame().empty() ? topics.cameraFrame()
                                                          : "camera_rgb_optical_frame";
   if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')

@@ -16,8 +16,8 @@ const char* const kCameraInfo = "sensor_msgs/CameraInfo";
 const std::vector<std::string> kColorNames = {"/camera/rgb/image_color", "/camera/rgb/image_raw",
                                               "/camera/rgb/image_rect_color"};
 const std::vector<std::string> kDepthNames = {
-    "/camera/depth/image", "/camera/depth_registered/image_raw",
-    "/camera/depth_registered/image", "/camera/depth/image_raw"};
+    "/camera/depth/image", "/camera/depth_registered/image_raw", "/camera/depth_registered/image",
+    "/camera/depth/image_raw"};
 
 std::string typeOf(const TopicList& topics, const std::string& name) {
   for (const auto& [topic, type] : topics)
@@ -64,8 +64,8 @@ std::string pick(const std::string& bag, const TopicList& topics, const std::str
                      imageTopicList(topics) + "); name one with --set " + key + "=TOPIC");
   std::string list;
   for (const std::string& c : candidates) list += (list.empty() ? "" : ", ") + c;
-  throw InputError(bag + ": " + std::to_string(candidates.size()) + " topics could be the " +
-                   what + " images (" + list + "); choose one with --set " + key + "=TOPIC");
+  throw InputError(bag + ": " + std::to_string(candidates.size()) + " topics could be the " + what +
+                   " images (" + list + "); choose one with --set " + key + "=TOPIC");
 }
 
 }  // namespace
@@ -82,8 +82,8 @@ BagTopics chooseBagTopics(const std::string& bag, const TopicList& topics,
     chosen.camera_info = keys.camera_info_topic;
   } else {
     // The colour camera's info: the mapper works in the colour camera's frame (depth registered).
-    const std::string sibling = chosen.color.substr(0, chosen.color.find_last_of('/') + 1) +
-                                "camera_info";
+    const std::string sibling =
+        chosen.color.substr(0, chosen.color.find_last_of('/') + 1) + "camera_info";
     if (typeOf(topics, sibling) == kCameraInfo) chosen.camera_info = sibling;
   }
   return chosen;

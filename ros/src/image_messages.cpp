@@ -42,8 +42,7 @@ std::string colorEncodingProblem(const std::string& encoding) {
 
 std::string depthEncodingProblem(const std::string& encoding) {
   if (encoding == enc::TYPE_32FC1 || encoding == enc::TYPE_16UC1) return "";
-  return "depth encoding '" + encoding +
-         "' is not supported (32FC1 metres or 16UC1 millimetres)";
+  return "depth encoding '" + encoding + "' is not supported (32FC1 metres or 16UC1 millimetres)";
 }
 
 bool colorFromMessage(const sensor_msgs::Image& msg, cv::Mat& bgr, std::string& error) {

@@ -6,8 +6,10 @@
 namespace {
 
 [[maybe_unused]] const bool registered = rgbdmap::registerSourceKind(
-    {"rosbag:", "rosbag:FILE.bag", [](const std::string& path) { return rgbdmap::presetForBag(path); },
-     [](const std::string& path, const rgbdmap::Config& config) -> std::unique_ptr<rgbdmap::FrameSource> {
+    {"rosbag:", "rosbag:FILE.bag",
+     [](const std::string& path) { return rgbdmap::presetForBag(path); },
+     [](const std::string& path,
+        const rgbdmap::Config& config) -> std::unique_ptr<rgbdmap::FrameSource> {
        return std::make_unique<rgbdmap::RosbagSource>(path, config);
      }});
 

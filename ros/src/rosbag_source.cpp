@@ -71,8 +71,8 @@ RosbagSource::RosbagSource(const std::string& path, const Config& config)
         bag_, rosbag::TopicQuery(std::vector<std::string>{topics_.color, topics_.depth}));
     at_ = view_->begin();
   } catch (const rosbag::BagUnindexedException& e) {
-    throw InputError(path + ": cannot read as a ROS bag (" + e.what() +
-                     "); `rosbag reindex " + path + "` rebuilds the index of a recording cut short");
+    throw InputError(path + ": cannot read as a ROS bag (" + e.what() + "); `rosbag reindex " +
+                     path + "` rebuilds the index of a recording cut short");
   } catch (const rosbag::BagIOException& e) {
     throw InputError(path + ": cannot read as a ROS bag (" + e.what() +
                      "); if it is a recording cut short, `rosbag reindex " + path +
@@ -116,7 +116,7 @@ bool RosbagSource::nextPair(StampPairer<ImagePtr>::Pair& pair) {
       ImagePtr image = m.instantiate<sensor_msgs::Image>();
       const std::string topic = m.getTopic();
       ++at_;
-      if (!image) continue;  // checked at open: only images are on these topics
+      if (!image) continue;                  // checked at open: only images are on these topics
       const double stamp = stampOf(*image);  // before the move below
       if (topic == topics_.color)
         pairer_.addColor(stamp, std::move(image));
@@ -147,13 +147,13 @@ ReadStatus RosbagSource::read(Frame& frame) {
   }
   std::string error;
   if (!depthFromMessage(*pair.depth, frame.depth, error)) {
-    skip("depth image: " + error, topics_.depth + " at " + std::to_string(pair.depth_time) + ": " +
-                                      error);
+    skip("depth image: " + error,
+         topics_.depth + " at " + std::to_string(pair.depth_time) + ": " + error);
     return ReadStatus::kSkipped;
   }
   if (!colorFromMessage(*pair.color, frame.color, error)) {
-    skip("colour image: " + error, topics_.color + " at " + std::to_string(pair.color_time) +
-                                       ": " + error);
+    skip("colour image: " + error,
+         topics_.color + " at " + std::to_string(pair.color_time) + ": " + error);
     return ReadStatus::kSkipped;
   }
   if (frame.depth.size() != frame.color.size() || frame.depth.cols != camera_.width ||
@@ -162,8 +162,8 @@ ReadStatus RosbagSource::read(Frame& frame) {
          topics_.depth + " at " + std::to_string(pair.depth_time) + ": depth " +
              std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows) +
              ", colour " + std::to_string(frame.color.cols) + "x" +
-             std::to_string(frame.color.rows) + ", camera " + std::to_string(camera_.width) +
-             "x" + std::to_string(camera_.height));
+             std::to_string(frame.color.rows) + ", camera " + std::to_string(camera_.width) + "x" +
+             std::to_string(camera_.height));
     return ReadStatus::kSkipped;
   }
   frame.timestamp = pair.color_time;

@@ -191,8 +191,8 @@ ReadStatus TopicSource::read(Frame& frame) {
     skip("image size differs from the colour image or the camera",
          depth_topic_ + ": depth " + std::to_string(frame.depth.cols) + "x" +
              std::to_string(frame.depth.rows) + ", colour " + std::to_string(frame.color.cols) +
-             "x" + std::to_string(frame.color.rows) + ", camera " +
-             std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+             "x" + std::to_string(frame.color.rows) + ", camera " + std::to_string(camera_.width) +
+             "x" + std::to_string(camera_.height));
     return ReadStatus::kSkipped;
   }
   frame.timestamp = pair.color_time;

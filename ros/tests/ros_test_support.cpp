@@ -45,8 +45,8 @@ std::string sharedBag(const std::string& tum_name, const std::string& options,
   // Written beside and renamed: tests running at the same time never see half a bag.
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   std::string output;
-  const int code = run(tum2bagBinary() + " " + options + " " + tumDir(tum_name) + " " + tmp,
-                       &output);
+  const int code =
+      run(tum2bagBinary() + " " + options + " " + tumDir(tum_name) + " " + tmp, &output);
   EXPECT_EQ(code, 0) << output;
   fs::rename(tmp, path);
   return path;

@@ -63,8 +63,8 @@ std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
   std::vector<std::string> args = {"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers"};
   if (!ns.empty()) args.push_back("--prefix=" + p);
   args.push_back(bag);  // before --topics, which takes every argument after it
-  for (const char* t : {"--topics", "/camera/rgb/image_color", "/camera/depth/image",
-                        "/camera/rgb/camera_info"})
+  for (const char* t :
+       {"--topics", "/camera/rgb/image_color", "/camera/depth/image", "/camera/rgb/camera_info"})
     args.push_back(t);
   return std::make_unique<Process>(args, log);
 }

@@ -148,7 +148,8 @@ TEST(RosbagSource, PacedAtTheRecordedRate) {
                 &log),
             0)
       << log;
-  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double took =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // The 32 pairs span 1.06 s of recording: played in no less time.
   const TumSequence folder(tumDir(kXyz));
   EXPECT_GE(took, folder[folder.size() - 1].rgb_time - folder[0].rgb_time);
@@ -250,9 +251,9 @@ TEST(RosbagSource, TruncatedBagIsRefusedClearly) {
   std::filesystem::copy_file(sharedBag(kXyz), bag);
   std::filesystem::resize_file(bag, std::filesystem::file_size(bag) / 2);
   std::string log;
-  const int code = run(binary() + " --source rosbag:" + bag + withGroundtruth(kXyz) +
-                           mapOptions(dir + "/m.pcd"),
-                       &log);
+  const int code =
+      run(binary() + " --source rosbag:" + bag + withGroundtruth(kXyz) + mapOptions(dir + "/m.pcd"),
+          &log);
   // rosbag cannot open a bag without its index: a clear refusal (rosbag reindex repairs it).
   EXPECT_EQ(code, 2) << log;
   EXPECT_NE(log.find("cut.bag: cannot read as a ROS bag"), std::string::npos) << log;

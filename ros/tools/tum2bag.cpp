@@ -114,8 +114,9 @@ int convert(const std::string& folder, const std::string& out, const std::string
         raw.convertTo(converted, CV_16U, 1000.0 / config.depth_scale);
       else
         raw.convertTo(converted, CV_32F, 1.0 / config.depth_scale);
-      fillImage(msg, converted, depth16 ? sensor_msgs::image_encodings::TYPE_16UC1
-                                        : sensor_msgs::image_encodings::TYPE_32FC1);
+      fillImage(msg, converted,
+                depth16 ? sensor_msgs::image_encodings::TYPE_16UC1
+                        : sensor_msgs::image_encodings::TYPE_32FC1);
       bag.write("/camera/depth/image", stamp, msg);
       sensor_msgs::CameraInfo info = cameraInfo(config.camera, depth_frame);
       info.header.stamp = stamp;

@@ -10,12 +10,12 @@ namespace rgbdmap {
 
 // The node's own settings, private parameters beside the config keys.
 struct NodeSettings {
-  std::string config;       // ~config: preset name or YAML file ("default")
-  std::string out;          // ~out: the map (PCD)
-  std::string stats;        // ~stats: counters as JSON at exit ("" = none)
-  std::string map_frame;    // ~map_frame
-  std::string camera_frame; // ~camera_frame ("" = the colour images' frame_id)
-  double map_interval = 2;  // ~map_interval: seconds between published maps at least
+  std::string config;        // ~config: preset name or YAML file ("default")
+  std::string out;           // ~out: the map (PCD)
+  std::string stats;         // ~stats: counters as JSON at exit ("" = none)
+  std::string map_frame;     // ~map_frame
+  std::string camera_frame;  // ~camera_frame ("" = the colour images' frame_id)
+  double map_interval = 2;   // ~map_interval: seconds between published maps at least
 };
 
 NodeSettings readNodeSettings(const ros::NodeHandle& private_nh);

@@ -33,9 +33,9 @@ class StampPairer {
   // still holds is settled.
   bool next(Pair& out, bool flush = false) {
     if (color_.empty() || depth_.empty()) return dropSettled(flush), false;
-    const double cutoff = flush ? std::numeric_limits<double>::infinity()
-                                : std::min(color_.back().time, depth_.back().time) -
-                                      2 * max_difference_;
+    const double cutoff =
+        flush ? std::numeric_limits<double>::infinity()
+              : std::min(color_.back().time, depth_.back().time) - 2 * max_difference_;
     const auto matches = associate(times(color_), times(depth_), max_difference_);
     if (!matches.empty()) {
       const auto [i, j] = matches.front();
