@@ -1,6 +1,7 @@
 #include "rgbdmap/ros/node_params.hpp"
 
 #include <cstdio>
+#include <set>
 
 #include "rgbdmap/base/error.hpp"
 
@@ -55,6 +56,26 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
 }
 
 void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
+  // A misspelt parameter would otherwise be ignored in silence, as an unknown --set key is not.
+  std::vector<std::string> names;
+  const std::string prefix = nh.getNamespace() + "/";
+  const std::set<std::string> settings = {"config",    "out",          "stats",
+                                          "map_frame", "camera_frame", "map_interval"};
+  std::set<std::string> keys;
+  for (const Config::Key& key : config.keys()) keys.insert(key.name);
+  if (ros::param::getParamNames(names)) {
+    for (const std::string& name : names) {
+      if (name.rfind(prefix, 0) != 0) continue;
+      std::string key = name.substr(prefix.size());
+      if (settings.count(key)) continue;
+      for (char& c : key)
+        if (c == '/') c = '.';
+      if (!keys.count(key))
+        throw InputError("parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
+                         "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
+                         "~camera_frame, ~map_interval)");
+    }
+  }
   for (const Config::Key& key : config.keys()) {
     std::string name = key.name;
     for (char& c : name)

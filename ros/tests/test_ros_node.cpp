@@ -192,8 +192,15 @@ TEST_F(RosNode, BadParameterIsOneClearMessage) {
   const std::string log = dir_ + "/node.log";
   Process node({nodeBinary(), "_map/voxel_size:=-1"}, log);
   EXPECT_EQ(node.wait(60), 2) << readFile(log);
-  EXPECT_NE(readFile(log).find("parameter /rgbdmap/map/voxel_size"), std::string::npos)
+  EXPECT_NE(readFile(log).find("parameter /rgbdmap/map/voxel_size: map.voxel_size"),
+            std::string::npos)
       << readFile(log);
+  // A misspelt key is refused too, not ignored (parameters stay on the master: another name).
+  const std::string log2 = dir_ + "/node2.log";
+  Process node2({nodeBinary(), "__name:=mapper", "_map/voxel_sise:=0.005"}, log2);
+  EXPECT_EQ(node2.wait(60), 2) << readFile(log2);
+  EXPECT_NE(readFile(log2).find("parameter /mapper/map/voxel_sise: unknown"), std::string::npos)
+      << readFile(log2);
 }
 
 }  // namespace
