@@ -3,6 +3,8 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Trigger.h>
 
@@ -201,6 +203,41 @@ TEST_F(RosNode, BadParameterIsOneClearMessage) {
   EXPECT_EQ(node2.wait(60), 2) << readFile(log2);
   EXPECT_NE(readFile(log2).find("parameter /mapper/map/voxel_sise: unknown"), std::string::npos)
       << readFile(log2);
+}
+
+TEST_F(RosNode, UnsupportedEncodingIsOneClearMessage) {
+  // Two mono8 "colour" images with depth: a camera set to the wrong format.
+  const std::string bag = dir_ + "/mono.bag";
+  {
+    rosbag::Bag b(bag, rosbag::bagmode::Write);
+    for (int i = 0; i < 10; ++i) {
+      sensor_msgs::Image color, depth;
+      color.header.stamp.fromSec(100 + i / 30.0);
+      color.header.seq = static_cast<std::uint32_t>(i);
+      color.width = depth.width = 32;
+      color.height = depth.height = 24;
+      color.encoding = "mono8";
+      color.step = 32;
+      color.data.assign(32 * 24, 0);
+      depth.header = color.header;
+      depth.encoding = "32FC1";
+      depth.step = 32 * 4;
+      depth.data.assign(32 * 24 * 4, 0);
+      b.write("/camera/rgb/image_color", color.header.stamp, color);
+      b.write("/camera/depth/image", depth.header.stamp, depth);
+    }
+  }
+  const std::string log = dir_ + "/node.log";
+  Process node({nodeBinary(), "_out:=" + dir_ + "/map.pcd"}, log);
+  std::vector<std::string> args = {"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers", bag};
+  Process player(args, dir_ + "/play.log");
+  EXPECT_EQ(node.wait(60), 2) << readFile(log);
+  EXPECT_NE(readFile(log).find("/camera/rgb/image_color: colour encoding 'mono8' is not supported"),
+            std::string::npos)
+      << readFile(log);
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/map.pcd"));
+  player.signal(SIGINT);
+  player.wait(30);
 }
 
 }  // namespace

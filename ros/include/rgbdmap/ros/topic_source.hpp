@@ -29,6 +29,8 @@ class TopicSource : public FrameSource {
   static constexpr const char* kCameraInfoTopic = "camera/rgb/camera_info";
 
   TopicSource(ros::NodeHandle& nh, const Config& config, const std::atomic<bool>& stop);
+  // Unsubscribes first (waiting for a callback in progress), before the members it uses go.
+  ~TopicSource() override { shutdown(); }
 
   // Waits for the first colour/depth pair (and the camera_info when the intrinsics come from
   // it, for a few seconds more). Returns false when a stop came first. Throws InputError naming
