@@ -48,7 +48,11 @@ std::string sharedBag(const std::string& tum_name, const std::string& options,
   const int code =
       run(tum2bagBinary() + " " + options + " " + tumDir(tum_name) + " " + tmp, &output);
   EXPECT_EQ(code, 0) << output;
-  fs::rename(tmp, path);
+  // A failed conversion leaves no bag behind for the next test to take as good.
+  if (code == 0)
+    fs::rename(tmp, path);
+  else
+    fs::remove(tmp);
   return path;
 }
 
