@@ -5,6 +5,8 @@
 #                          runtime -> slam -> tracking (loop closure; mapping never sees it)
 #                          runtime -> drivers -> capture;   eval -> sim -> base;   eval -> capture
 #   launcher (the `rgbdmap` command: libc only, includes no rgbdmap header)
+#   ros (ros/: the ROS adapter) -> runtime and below; nothing includes ros, and no file outside
+#   ros/ includes a ROS header (the core builds without ROS)
 # Run as a build step: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
 cmake_policy(SET CMP0057 NEW)
 set(allowed_base base)
@@ -19,9 +21,10 @@ set(allowed_runtime base capture tracking mapping slam drivers runtime)
 set(allowed_viewer base capture tracking mapping slam runtime viewer)
 set(allowed_tools base capture tracking mapping slam drivers runtime sim eval viewer tools)
 set(allowed_launcher "")
+set(allowed_ros base capture tracking mapping slam drivers runtime ros)
 
 set(violations "")
-foreach(layer base capture tracking mapping slam sim eval drivers runtime viewer tools launcher)
+foreach(layer base capture tracking mapping slam sim eval drivers runtime viewer tools launcher ros)
   file(GLOB_RECURSE files
     ${SOURCE_DIR}/src/${layer}/*.c
     ${SOURCE_DIR}/src/${layer}/*.cpp ${SOURCE_DIR}/src/${layer}/*.hpp
@@ -32,6 +35,8 @@ foreach(layer base capture tracking mapping slam sim eval drivers runtime viewer
   elseif(layer STREQUAL "tools")
     file(GLOB more ${SOURCE_DIR}/tools/*.cpp ${SOURCE_DIR}/tools/*.hpp)
     list(APPEND files ${more})
+  elseif(layer STREQUAL "ros")
+    file(GLOB_RECURSE files ${SOURCE_DIR}/ros/*.cpp ${SOURCE_DIR}/ros/*.hpp)
   endif()
   foreach(file ${files})
     file(STRINGS ${file} includes REGEX "^#include \"rgbdmap/[a-z_]+/")
@@ -44,6 +49,20 @@ foreach(layer base capture tracking mapping slam sim eval drivers runtime viewer
     endforeach()
   endforeach()
 endforeach()
+# ROS headers only in ros/: the core, its tools and tests build where ROS is not installed.
+file(GLOB_RECURSE core_files ${SOURCE_DIR}/src/*.cpp ${SOURCE_DIR}/src/*.hpp ${SOURCE_DIR}/src/*.c
+  ${SOURCE_DIR}/include/*.hpp ${SOURCE_DIR}/drivers/*.cpp ${SOURCE_DIR}/drivers/*.hpp
+  ${SOURCE_DIR}/tools/*.cpp ${SOURCE_DIR}/tools/*.hpp ${SOURCE_DIR}/tests/*.cpp
+  ${SOURCE_DIR}/tests/*.hpp)
+foreach(file ${core_files})
+  file(STRINGS ${file} ros_includes REGEX
+    "^#include [<\"](ros|rosbag|sensor_msgs|geometry_msgs|std_srvs|std_msgs|tf2|tf2_ros)/")
+  foreach(line ${ros_includes})
+    file(RELATIVE_PATH rel ${SOURCE_DIR} ${file})
+    string(APPEND violations "  ${rel} includes a ROS header outside ros/: ${line}\n")
+  endforeach()
+endforeach()
+
 if(violations)
   message(FATAL_ERROR "Includes against the layering (see cmake/check_layers.cmake):\n${violations}")
 endif()

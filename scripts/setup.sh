@@ -8,7 +8,12 @@ packages=(
   libopenni2-dev libfreenect-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
   libboost-dev libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev
   libtsl-hopscotch-map-dev libceres-dev
-  libvtk9-dev libx11-dev libgl-dev xvfb
+  libvtk9-dev libx11-dev libgl-dev xvfb ccache
+  # ROS 1 Noetic as Debian packages it: the ros/ adapter (rosbag: source, rgbdmap_node) and the
+  # tools its tests drive (roscore, rosbag, rostopic).
+  ros-core-dev libroscpp-dev librosbag-dev libsensor-msgs-dev libgeometry-msgs-dev
+  libstd-srvs-dev libtf2-ros-dev ros-core python3-rosbag python3-rostopic
+  python3-sensor-msgs python3-geometry-msgs python3-std-srvs
 )
 missing=()
 for p in "${packages[@]}"; do

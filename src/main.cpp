@@ -189,9 +189,8 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
     return 0;
   }
   if (o.source.empty()) {
-    spdlog::error(
-        "no --source given (tum:DIR, openni2, openni2:URI or openni2:FILE.oni); `rgbdmap synth "
-        "--out DIR` makes a sequence to try");
+    spdlog::error("no --source given ({}); `rgbdmap synth --out DIR` makes a sequence to try",
+                  rgbdmap::sourceUsage());
     return 2;
   }
   checkOutputFolder(o.out);
@@ -265,7 +264,7 @@ int main(int argc, char** argv) {
   MapOptions o;
   app.add_option("-c,--config", o.config_file,
                  "YAML config: a preset name (tum_fr1, kinect_v1, ...) or a file");
-  app.add_option("-s,--source", o.source, "tum:DIR | openni2 | openni2:URI | openni2:FILE.oni");
+  app.add_option("-s,--source", o.source, rgbdmap::sourceUsage());
   app.add_option("-o,--out", o.out, "map file (PCD); checkpoints overwrite it atomically")
       ->capture_default_str();
   app.add_option("-r,--rate", o.rate,

@@ -127,7 +127,8 @@ std::vector<Config::Key> Config::keys() {
              "depth units per metre (TUM PNG 5000, OpenNI2 1000)"),
       // OpenNI2 sources: where the intrinsics come from.
       choice("camera.intrinsics", &camera_intrinsics, {"preset", "device"},
-             "preset: camera.fx/fy/cx/cy; device: from the OpenNI2 device's field of view"),
+             "preset: camera.fx/fy/cx/cy; device: from the OpenNI2 device's field of view or "
+             "the ROS camera_info (used anyway with the default preset and camera keys)"),
       number(
           "replay.rate", &rate, 0, 1000,
           "replay speed: 1 = as recorded (late frames dropped), 0 = as fast as possible, lossless"),
@@ -139,6 +140,14 @@ std::vector<Config::Key> Config::keys() {
       text("pose.trajectory", &pose_trajectory, "TUM trajectory file when pose.source=trajectory"),
       number("pose.max_gap", &pose_max_gap, 0, 10,
              "a frame farther than this (s) from any pose sample gets no pose and is not mapped"),
+      // ROS sources (rosbag:, rgbdmap_node); the core only keeps the names.
+      text("ros.color_topic", &ros.color_topic,
+           "rosbag: colour image topic (empty: TUM's /camera/rgb/image_color or the one colour "
+           "image topic)"),
+      text("ros.depth_topic", &ros.depth_topic,
+           "rosbag: depth image topic, 32FC1 metres or 16UC1 millimetres (empty: detected)"),
+      text("ros.camera_info_topic", &ros.camera_info_topic,
+           "rosbag: camera_info topic (empty: camera_info beside the colour topic)"),
       choice("tracking.method", &tracking.method, {"dense", "opencv_rgbd", "opencv_rgbd_icp"},
              "odometry: dense (ours, against keyframes), opencv_rgbd or opencv_rgbd_icp (OpenCV)"),
       integer("tracking.coarsest_level", &tracking.coarsest_level, 1, 6,

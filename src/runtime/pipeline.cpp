@@ -243,9 +243,6 @@ int Pipeline::run(RunControl& control) {
           if (corrections && outputs_.publisher)
             frame->pose = corrections->snapshot().apply(frame->anchor, frame->pose);
           publication.afterFrame(*frame, tracker.state(), stats_, keyframe);
-          if (publication.mapDue(stats_))
-            fusion.request(MapRequest::kViewer,
-                           [&publication](const Mapper& m) { publication.publishMap(m); });
         } catch (const std::exception& e) {
           error.set(std::string(frame->origin) + ": " + e.what());
           control.stop.store(true);
@@ -255,6 +252,11 @@ int Pipeline::run(RunControl& control) {
         stats_.track_latency.record(
             std::chrono::duration<double>(Clock::now() - track_start).count());
       }
+      // Also while no frame comes (a camera paused, a bag played to its end): the subscriber
+      // still gets the map with the last keyframes in it.
+      if (publication.mapDue(stats_))
+        fusion.request(MapRequest::kViewer,
+                       [&publication](const Mapper& m) { publication.publishMap(m); });
       const std::uint64_t keyframes = tracker.keyframesAccepted();
       const bool by_count = config_.checkpoint_every_keyframes > 0 &&
                             keyframes - keyframes_at_checkpoint >=

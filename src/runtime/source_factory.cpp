@@ -1,10 +1,39 @@
 #include "rgbdmap/runtime/source_factory.hpp"
 
+#include <vector>
+
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/tum_source.hpp"
 #include "rgbdmap/drivers/openni2_source.hpp"
 
 namespace rgbdmap {
+namespace {
+
+// Filled by static initializers before main(), read-only afterwards: no lock needed. A function
+// static, so that it exists whichever initializer runs first.
+std::vector<SourceKind>& registeredKinds() {
+  static std::vector<SourceKind> kinds;
+  return kinds;
+}
+
+const SourceKind* registeredKind(const std::string& spec) {
+  for (const SourceKind& kind : registeredKinds())
+    if (spec.rfind(kind.prefix, 0) == 0) return &kind;
+  return nullptr;
+}
+
+}  // namespace
+
+bool registerSourceKind(SourceKind kind) {
+  registeredKinds().push_back(std::move(kind));
+  return true;
+}
+
+std::string sourceUsage() {
+  std::string usage = "tum:DIR, openni2, openni2:URI, openni2:FILE.oni";
+  for (const SourceKind& kind : registeredKinds()) usage += ", " + kind.usage;
+  return usage;
+}
 
 std::string presetForSource(const std::string& spec) {
   if (spec.rfind("tum:", 0) == 0) {
@@ -24,6 +53,10 @@ std::string presetForSource(const std::string& spec) {
     const std::string model = openNI2CameraModel(uri);
     return model.empty() ? "kinect_v1" : model;
   }
+  if (const SourceKind* kind = registeredKind(spec)) {
+    const std::string preset = kind->preset(spec.substr(kind->prefix.size()));
+    return preset.empty() ? "default" : preset;
+  }
   return "default";
 }
 
@@ -36,8 +69,9 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const Config& c
   }
   if (spec == "openni2") return openOpenNI2Source("", config);
   if (spec.rfind("openni2:", 0) == 0) return openOpenNI2Source(spec.substr(8), config);
-  throw InputError("--source " + spec + ": unknown source (expected tum:DIR, openni2, " +
-                   "openni2:URI or openni2:FILE.oni)");
+  if (const SourceKind* kind = registeredKind(spec))
+    return kind->open(spec.substr(kind->prefix.size()), config);
+  throw InputError("--source " + spec + ": unknown source (expected " + sourceUsage() + ")");
 }
 
 }  // namespace rgbdmap

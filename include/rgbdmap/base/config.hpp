@@ -29,6 +29,13 @@ struct Config {
   std::string pose_trajectory;       // pose.trajectory: TUM file for pose.source=trajectory
   double pose_max_gap = 0.05;        // pose.max_gap: s to the nearest ground truth sample
 
+  // ros.*: topics of a rosbag: source ("" = detected); the node takes its topics by remapping.
+  struct RosTopics {
+    std::string color_topic;
+    std::string depth_topic;
+    std::string camera_info_topic;
+  } ros;
+
   TrackingOptions tracking;  // tracking.*: odometry for sources without ground truth
   LoopOptions loop;          // loop.*: loop closure for the dense tracker
 

@@ -1,0 +1,27 @@
+#pragma once
+
+#include <ros/ros.h>
+
+#include <string>
+
+#include "rgbdmap/base/config.hpp"
+
+namespace rgbdmap {
+
+// The node's own settings, private parameters beside the config keys.
+struct NodeSettings {
+  std::string config;        // ~config: preset name or YAML file ("default")
+  std::string out;           // ~out: the map (PCD)
+  std::string stats;         // ~stats: counters as JSON at exit ("" = none)
+  std::string map_frame;     // ~map_frame
+  std::string camera_frame;  // ~camera_frame ("" = the colour images' frame_id)
+  double map_interval = 2;   // ~map_interval: seconds between published maps at least
+};
+
+NodeSettings readNodeSettings(const ros::NodeHandle& private_nh);
+
+// Every config key as a private parameter, '.' written '/': _map/voxel_size:=0.005 sets
+// map.voxel_size. Throws InputError naming the parameter when a value is wrong.
+void applyPrivateParams(const ros::NodeHandle& private_nh, Config& config);
+
+}  // namespace rgbdmap

@@ -1,0 +1,66 @@
+#pragma once
+
+#include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "rgbdmap/runtime/map_publisher.hpp"
+
+namespace rgbdmap {
+
+// The run as ROS sees it, through the same publisher interface as the viewer: ~map
+// (sensor_msgs/PointCloud2, latched, at most every `map_interval` s), ~pose
+// (geometry_msgs/PoseStamped) and TF map_frame -> camera frame. The pipeline's calls only copy
+// into a mailbox; a thread of its own converts and publishes, so ROS never slows mapping.
+class RosPublisher : public MapPublisher {
+ public:
+  struct Options {
+    std::string map_frame = "map";
+    std::string camera_frame = "camera_rgb_optical_frame";
+    double map_interval = 2.0;  // seconds between maps at most
+  };
+  RosPublisher(ros::NodeHandle& private_nh, Options options);
+  ~RosPublisher() override;
+
+  void publishFrame(const Frame& frame, const PublishedStatus& status) override;
+  bool wantsMap() const override;
+  void publishMap(std::shared_ptr<const MapCloud> map) override;
+
+  // Publishes what is still waiting (the final map) and stops the thread.
+  void finish();
+  std::uint64_t mapsPublished() const { return maps_published_.load(); }
+
+ private:
+  void run();
+  void sendPose(double stamp, const Eigen::Isometry3d& pose);
+  void sendMap(const MapCloud& map, double stamp);
+
+  Options options_;
+  ros::Publisher map_pub_, pose_pub_;
+  tf2_ros::TransformBroadcaster tf_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  struct StampedPose {
+    double stamp;
+    Eigen::Isometry3d pose;
+  };
+  // Every frame's pose goes out (a planner wants them all); bounded, should ROS stall.
+  std::deque<StampedPose> poses_;
+  double last_stamp_ = 0;
+  std::shared_ptr<const MapCloud> map_;
+  std::atomic<bool> map_pending_{false};
+  std::atomic<double> next_map_at_{0.0};  // steady-clock seconds
+  bool stop_ = false;
+  std::atomic<std::uint64_t> maps_published_{0};
+  std::thread thread_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,247 @@
+// rgbdmap_node: the rgbdmap pipeline as a ROS node. Subscribes to a camera's colour, depth and
+// camera_info topics, publishes ~map, ~pose and TF, serves ~save_map and ~snapshot, and takes
+// every config key as a private parameter. Signals, checkpoints and the exit are the CLI's:
+// SIGUSR1 writes the map, SIGINT/SIGTERM stop with a final save (exit 0), a second SIGINT quits.
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <spdlog/spdlog.h>
+#include <std_srvs/Trigger.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/ros/node_params.hpp"
+#include "rgbdmap/ros/ros_publisher.hpp"
+#include "rgbdmap/ros/topic_source.hpp"
+#include "rgbdmap/runtime/pipeline.hpp"
+
+namespace {
+
+using namespace rgbdmap;
+
+sigset_t handledSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGUSR1);
+  return set;
+}
+
+// Signals are taken by this thread with sigwait (blocked everywhere else, before any thread
+// exists), so no handler runs inside ROS or mapping code. ROS's own SIGINT handler is off.
+class SignalThread {
+ public:
+  explicit SignalThread(RunControl& control) : control_(control) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~SignalThread() {
+    done_.store(true);
+    thread_.join();
+  }
+  void setMapPath(const std::string& path) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    map_path_ = path;
+  }
+
+ private:
+  void run() {
+    const sigset_t set = handledSignals();
+    const timespec timeout{0, 100 * 1000 * 1000};
+    while (!done_.load()) {
+      const int sig = sigtimedwait(&set, nullptr, &timeout);
+      if (sig == SIGUSR1) {
+        spdlog::info("SIGUSR1: writing a checkpoint");
+        control_.snapshot.store(true);
+      } else if (sig == SIGINT || sig == SIGTERM) {
+        if (control_.stop.exchange(true) && sig == SIGINT) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          if (!map_path_.empty())
+            std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
+          std::fputs("\nsecond interrupt: quitting without the final save\n", stderr);
+          std::_Exit(130);
+        }
+        spdlog::info("{}: stopping (interrupt again to quit without saving)",
+                     sig == SIGINT ? "SIGINT" : "SIGTERM");
+      }
+    }
+  }
+  RunControl& control_;
+  std::mutex mutex_;
+  std::string map_path_;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+std::string stem(const std::string& path) {
+  const std::filesystem::path p(path);
+  return (p.parent_path() / p.stem()).string();
+}
+
+void checkOutputFolder(const std::string& map_path) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::path(map_path).parent_path();
+  if (folder.empty()) return;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec) && !fs::create_directories(folder, ec))
+    throw InputError("~out " + map_path + ": cannot create the folder " + folder.string());
+  if (::access(folder.c_str(), W_OK) != 0)
+    throw InputError("~out " + map_path + ": the folder " + folder.string() + " is not writable");
+}
+
+// ~save_map and ~snapshot: ask for a checkpoint as SIGUSR1 does, and answer once it is written
+// (or failed), so that the caller can use the file at once.
+bool writeMapNow(RunControl& control, const RunStats& stats, const std::string& path,
+                 std_srvs::Trigger::Response& response) {
+  const auto done = [&] {
+    return stats.checkpoints_written.load() + stats.checkpoints_failed.load();
+  };
+  const std::uint64_t before_written = stats.checkpoints_written.load();
+  const std::uint64_t before = done();
+  control.snapshot.store(true);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (done() == before && !control.stop.load() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  response.success = stats.checkpoints_written.load() > before_written;
+  if (response.success)
+    response.message = path + " (" + std::to_string(stats.map_points.load()) + " points)";
+  else if (control.stop.load())
+    response.message = "stopping: the final save writes " + path;
+  else
+    response.message = "the checkpoint of " + path + " failed (see the node's log)";
+  return true;
+}
+
+std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c,
+                           std::uint64_t maps) {
+  const auto brace = json.find_last_of('}');
+  std::string out = json.substr(0, brace);
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  out += ",\n  \"ros\": {\"color_received\": " + std::to_string(c.color_received) +
+         ", \"depth_received\": " + std::to_string(c.depth_received) +
+         ", \"color_lost\": " + std::to_string(c.color_lost) +
+         ", \"paired\": " + std::to_string(c.paired) +
+         ", \"buffer_dropped\": " + std::to_string(c.buffer_dropped) +
+         ", \"unmatched\": " + std::to_string(c.unmatched) +
+         ", \"maps_published\": " + std::to_string(maps) + "}\n}\n";
+  return out;
+}
+
+int runNode(RunControl& control, SignalThread& signals) {
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  const NodeSettings settings = readNodeSettings(pnh);
+  Config config;
+  config.loadPreset(settings.config);
+  applyPrivateParams(pnh, config);
+  checkOutputFolder(settings.out);
+  signals.setMapPath(settings.out);
+
+  // Image callbacks on the global queue, one thread: the pairer sees messages in order.
+  ros::AsyncSpinner image_spinner(1);
+  auto source = std::make_unique<TopicSource>(nh, config, control.stop);
+  TopicSource& topics = *source;
+  image_spinner.start();
+  if (!topics.waitForCamera()) {
+    spdlog::info("stopped before any image arrived: nothing mapped, no map written");
+    topics.shutdown();
+    return 0;
+  }
+  if (config.pose_source == "auto") config.pose_source = "odometry";
+  if (config.pose_source == "groundtruth")
+    throw InputError(
+        "pose.source=groundtruth: a ROS camera has no ground truth; use odometry "
+        "or trajectory");
+
+  RosPublisher::Options publish;
+  publish.map_frame = settings.map_frame;
+  publish.camera_frame = !settings.camera_frame.empty()  ? settings.camera_frame
+                         : !topics.cameraFrame().empty() ? topics.cameraFrame()
+                                                         : "camera_rgb_optical_frame";
+  if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
+    publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
+  publish.map_interval = settings.map_interval;
+  RosPublisher publisher(pnh, publish);
+
+  PipelineOutputs outputs;
+  outputs.map_path = settings.out;
+  outputs.trajectory_path = stem(settings.out) + "_keyframes.txt";
+  outputs.frame_trajectory_path = stem(settings.out) + "_trajectory.txt";
+  outputs.config_path = stem(settings.out) + ".yaml";
+  outputs.status_line = false;
+  outputs.publisher = &publisher;
+  spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
+  Pipeline pipeline(config, std::move(source), outputs);
+
+  // Services on a queue and thread of their own: a call waits for its checkpoint without
+  // holding up the image callbacks.
+  ros::CallbackQueue service_queue;
+  ros::NodeHandle service_nh("~");
+  service_nh.setCallbackQueue(&service_queue);
+  const auto handler = [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+    return writeMapNow(control, pipeline.stats(), settings.out, response);
+  };
+  ros::ServiceServer save_map =
+      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
+          "save_map", handler);
+  ros::ServiceServer snapshot =
+      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
+          "snapshot", handler);
+  ros::AsyncSpinner service_spinner(1, &service_queue);
+  service_spinner.start();
+  spdlog::info("mapping: publishing {} and {}, TF {} -> {}; services {} and {}",
+               pnh.resolveName("map"), pnh.resolveName("pose"), publish.map_frame,
+               publish.camera_frame, save_map.getService(), snapshot.getService());
+
+  const int code = pipeline.run(control);
+  topics.shutdown();
+  publisher.finish();
+  const TopicSource::Counts counts = topics.counts();
+  const RunStats& stats = pipeline.stats();
+  spdlog::info(
+      "rgbdmap_node: {} colour images received ({} lost before the node), {} pairs, {} dropped "
+      "by the node ({} in its buffer, {} in the queue), {} frames mapped, {} maps published",
+      counts.color_received, counts.color_lost, counts.paired,
+      counts.buffer_dropped + stats.frames_dropped.load(), counts.buffer_dropped,
+      stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
+  if (!settings.stats.empty()) {
+    std::ofstream out(settings.stats);
+    out << withNodeCounts(stats.toJson(), counts, publisher.mapsPublished());
+    if (!out) spdlog::error("{}: cannot write statistics", settings.stats);
+  }
+  service_spinner.stop();
+  image_spinner.stop();
+  return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Before any thread exists, so that all inherit the mask.
+  const sigset_t set = handledSignals();
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);
+  spdlog::default_logger_raw();
+  ros::init(argc, argv, "rgbdmap", ros::init_options::NoSigintHandler);
+  RunControl control;
+  int code = 0;
+  {
+    SignalThread signals(control);
+    try {
+      code = runNode(control, signals);
+    } catch (const InputError& e) {
+      spdlog::error("{}", e.what());
+      code = 2;
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      code = 1;
+    }
+  }
+  ros::shutdown();
+  return code;
+}

@@ -1,0 +1,90 @@
+#include "rgbdmap/ros/node_params.hpp"
+
+#include <cstdio>
+#include <set>
+
+#include "rgbdmap/base/error.hpp"
+
+namespace rgbdmap {
+namespace {
+
+// A parameter's value as the text a config file would hold.
+std::string text(XmlRpc::XmlRpcValue& value, const std::string& name) {
+  switch (value.getType()) {
+    case XmlRpc::XmlRpcValue::TypeString:
+      return static_cast<std::string>(value);
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      return static_cast<bool>(value) ? "true" : "false";
+    case XmlRpc::XmlRpcValue::TypeInt:
+      return std::to_string(static_cast<int>(value));
+    case XmlRpc::XmlRpcValue::TypeDouble: {
+      char buffer[32];
+      std::snprintf(buffer, sizeof buffer, "%.17g", static_cast<double>(value));
+      return buffer;
+    }
+    default:
+      throw InputError("parameter " + name + ": expected a single value");
+  }
+}
+
+std::string stringParam(const ros::NodeHandle& nh, const std::string& name,
+                        const std::string& fallback) {
+  XmlRpc::XmlRpcValue value;
+  if (!nh.getParam(name, value)) return fallback;
+  return text(value, nh.resolveName(name));
+}
+
+}  // namespace
+
+NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
+  NodeSettings s;
+  s.config = stringParam(nh, "config", "default");
+  s.out = stringParam(nh, "out", "map.pcd");
+  s.stats = stringParam(nh, "stats", "");
+  s.map_frame = stringParam(nh, "map_frame", "map");
+  s.camera_frame = stringParam(nh, "camera_frame", "");
+  const std::string interval = stringParam(nh, "map_interval", "2");
+  try {
+    s.map_interval = std::stod(interval);
+  } catch (const std::exception&) {
+    throw InputError("parameter " + nh.resolveName("map_interval") + ": '" + interval +
+                     "' is not a number");
+  }
+  if (!(s.map_interval >= 0))
+    throw InputError("parameter " + nh.resolveName("map_interval") + ": must be >= 0");
+  return s;
+}
+
+void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
+  // A misspelt parameter would otherwise be ignored in silence, as an unknown --set key is not.
+  std::vector<std::string> names;
+  const std::string prefix = nh.getNamespace() + "/";
+  const std::set<std::string> settings = {"config",    "out",          "stats",
+                                          "map_frame", "camera_frame", "map_interval"};
+  std::set<std::string> keys;
+  for (const Config::Key& key : config.keys()) keys.insert(key.name);
+  if (ros::param::getParamNames(names)) {
+    for (const std::string& name : names) {
+      if (name.rfind(prefix, 0) != 0) continue;
+      std::string key = name.substr(prefix.size());
+      if (settings.count(key)) continue;
+      for (char& c : key)
+        if (c == '/') c = '.';
+      if (!keys.count(key))
+        throw InputError("parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
+                         "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
+                         "~camera_frame, ~map_interval)");
+    }
+  }
+  for (const Config::Key& key : config.keys()) {
+    std::string name = key.name;
+    for (char& c : name)
+      if (c == '.') c = '/';
+    XmlRpc::XmlRpcValue value;
+    if (!nh.getParam(name, value)) continue;
+    const std::string resolved = nh.resolveName(name);
+    config.set(key.name, text(value, resolved), "parameter " + resolved);
+  }
+}
+
+}  // namespace rgbdmap

@@ -1,0 +1,155 @@
+#include "rgbdmap/ros/ros_publisher.hpp"
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/PointField.h>
+
+#include <chrono>
+#include <cstring>
+
+namespace rgbdmap {
+namespace {
+
+constexpr std::size_t kMaxPoses = 256;
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+ros::Time rosTime(double seconds) {
+  ros::Time t;
+  if (seconds > 0) t.fromSec(seconds);
+  return t;
+}
+
+sensor_msgs::PointField field(const char* name, std::uint32_t offset) {
+  sensor_msgs::PointField f;
+  f.name = name;
+  f.offset = offset;
+  f.datatype = sensor_msgs::PointField::FLOAT32;
+  f.count = 1;
+  return f;
+}
+
+}  // namespace
+
+RosPublisher::RosPublisher(ros::NodeHandle& private_nh, Options options)
+    : options_(std::move(options)) {
+  // Latched: a consumer that subscribes later (another machine, a screen) still gets the map.
+  map_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>("map", 1, true);
+  pose_pub_ = private_nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
+  thread_ = std::thread([this] { run(); });
+}
+
+RosPublisher::~RosPublisher() { finish(); }
+
+void RosPublisher::finish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stop_) return;
+    stop_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void RosPublisher::publishFrame(const Frame& frame, const PublishedStatus& /*status*/) {
+  if (!frame.has_pose) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (poses_.size() >= kMaxPoses) poses_.pop_front();
+    poses_.push_back({frame.timestamp, frame.pose});
+    last_stamp_ = frame.timestamp;
+  }
+  wake_.notify_one();
+}
+
+bool RosPublisher::wantsMap() const { return !map_pending_.load() && now() >= next_map_at_.load(); }
+
+void RosPublisher::publishMap(std::shared_ptr<const MapCloud> map) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    map_ = std::move(map);
+    map_pending_.store(true);
+  }
+  wake_.notify_one();
+}
+
+void RosPublisher::run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [&] { return stop_ || !poses_.empty() || map_; });
+    while (!poses_.empty()) {
+      const StampedPose p = poses_.front();
+      poses_.pop_front();
+      lock.unlock();
+      sendPose(p.stamp, p.pose);
+      lock.lock();
+    }
+    if (map_) {
+      const std::shared_ptr<const MapCloud> map = std::move(map_);
+      map_.reset();
+      const double stamp = last_stamp_;
+      lock.unlock();
+      sendMap(*map, stamp);
+      next_map_at_.store(now() + options_.map_interval);
+      map_pending_.store(false);
+      lock.lock();
+    }
+    if (stop_ && poses_.empty() && !map_) break;
+  }
+}
+
+void RosPublisher::sendPose(double stamp, const Eigen::Isometry3d& pose) {
+  const Eigen::Quaterniond q(pose.rotation());
+  const Eigen::Vector3d t = pose.translation();
+  geometry_msgs::PoseStamped msg;
+  msg.header.stamp = rosTime(stamp);
+  msg.header.frame_id = options_.map_frame;
+  msg.pose.position.x = t.x();
+  msg.pose.position.y = t.y();
+  msg.pose.position.z = t.z();
+  msg.pose.orientation.x = q.x();
+  msg.pose.orientation.y = q.y();
+  msg.pose.orientation.z = q.z();
+  msg.pose.orientation.w = q.w();
+  pose_pub_.publish(msg);
+
+  geometry_msgs::TransformStamped tf;
+  tf.header = msg.header;
+  tf.child_frame_id = options_.camera_frame;
+  tf.transform.translation.x = t.x();
+  tf.transform.translation.y = t.y();
+  tf.transform.translation.z = t.z();
+  tf.transform.rotation = msg.pose.orientation;
+  tf_.sendTransform(tf);
+}
+
+void RosPublisher::sendMap(const MapCloud& map, double stamp) {
+  // x, y, z and PCL's packed rgb float: what rviz and pcl_conversions read.
+  constexpr std::uint32_t kStep = 16;
+  sensor_msgs::PointCloud2 msg;
+  msg.header.stamp = rosTime(stamp);
+  msg.header.frame_id = options_.map_frame;
+  msg.height = 1;
+  msg.width = static_cast<std::uint32_t>(map.size());
+  msg.fields = {field("x", 0), field("y", 4), field("z", 8), field("rgb", 12)};
+  msg.is_bigendian = false;
+  msg.point_step = kStep;
+  msg.row_step = kStep * msg.width;
+  msg.is_dense = true;
+  msg.data.resize(static_cast<std::size_t>(msg.row_step));
+  std::uint8_t* out = msg.data.data();
+  for (const pcl::PointXYZRGB& p : map.points) {
+    std::memcpy(out, &p.x, 4);
+    std::memcpy(out + 4, &p.y, 4);
+    std::memcpy(out + 8, &p.z, 4);
+    std::memcpy(out + 12, &p.rgb, 4);
+    out += kStep;
+  }
+  map_pub_.publish(msg);
+  maps_published_.fetch_add(1);
+}
+
+}  // namespace rgbdmap
