@@ -8,11 +8,6 @@
 
 namespace rgbdmap {
 
-float TsdfIntegrator::bandAt(float depth) const {
-  return std::max(static_cast<float>(truncation),
-                  static_cast<float>(truncation_sigmas) * kinectDepthSigma(depth));
-}
-
 namespace {
 
 // Rows per task when samples are prepared, blocks per task when voxels are updated: enough work
@@ -56,9 +51,9 @@ void allocate(const TsdfIntegrator& tsdf, const std::vector<TsdfIntegrator::Samp
 }
 
 // Adds the blocks already in the map that a view sees through: between the camera and what it
-// measured, beyond the distance where it carves. Allocation only reaches the band around each
-// measurement, so without this an object that went away would never be updated again.
-// Scans the blocks' coordinates (a compact array), not the blocks.
+// measured, beyond its band (in distance to the surface). Allocation only reaches the band around
+// each measurement, so without this an object that went away would never be updated again. Scans
+// the blocks' coordinates (a compact array), not the blocks.
 void touchSeenThrough(const TsdfIntegrator& tsdf,
                       const std::vector<TsdfIntegrator::Sample>& samples, int width, int height,
                       const Eigen::Isometry3f& world_to_camera, VoxelMap& map) {

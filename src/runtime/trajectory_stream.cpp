@@ -11,8 +11,6 @@
 
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
-
 namespace rgbdmap {
 namespace {
 
@@ -49,12 +47,6 @@ void TrajectoryStream::record(double timestamp, const Eigen::Isometry3d& pose,
                               std::int64_t anchor) {
   std::lock_guard<std::mutex> lock(mutex_);
   pending_.push_back({timestamp, pose, anchor});
-  ++recorded_;
-}
-
-std::size_t TrajectoryStream::recorded() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return recorded_;
 }
 
 bool TrajectoryStream::append(const std::string& file, const std::vector<Entry>& entries,

@@ -46,8 +46,6 @@ struct TsdfIntegrator {
   void integrate(const cv::Mat& depth, const cv::Mat& color_bgr, const Eigen::Isometry3d& pose,
                  VoxelMap& map, WorkerPool* pool = nullptr);
 
-  float bandAt(float depth) const;
-
   // What fusion needs of one pixel, computed once per image instead of once per voxel.
   struct Sample {
     float depth = 0.0f;   // m, 0 = none

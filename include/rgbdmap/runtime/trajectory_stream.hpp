@@ -32,7 +32,6 @@ class TrajectoryStream : public PoseSink {
   bool persist(std::string& error);
 
   const std::string& path() const { return path_; }
-  std::size_t recorded() const;
   // Reads the file as persist() last left it.
   Trajectory load() const { return Trajectory::load(path_); }
 
@@ -51,7 +50,6 @@ class TrajectoryStream : public PoseSink {
   const PoseCorrections* corrections_;
   mutable std::mutex mutex_;
   std::vector<Entry> pending_;  // recorded, not yet written
-  std::size_t recorded_ = 0;
   bool started_ = false;  // the first persist() truncates what an earlier run left
 };
 
