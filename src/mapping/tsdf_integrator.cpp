@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 
 #include "rgbdmap/mapping/back_projector.hpp"
 
@@ -10,27 +9,52 @@ namespace rgbdmap {
 
 namespace {
 
-// Rows per task when samples are prepared, blocks per task when voxels are updated: enough work
-// per task that handing tasks out costs nothing, enough tasks that threads finish together.
-constexpr int kRowsPerTask = 16;
+// Rows of cells per task when incidence is computed, blocks per task when voxels are updated:
+// enough work per task that handing tasks out costs nothing, enough tasks that threads finish
+// together.
+constexpr int kCellRowsPerTask = 8;
 constexpr std::size_t kBlocksPerTask = 32;
 
+std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) {
+  const float mixed = old_value + alpha * (static_cast<float>(new_value) - old_value);
+  return static_cast<std::uint8_t>(std::clamp(mixed + 0.5f, 0.0f, 255.0f));
+}
+
+// The image itself when its rows are contiguous, else a contiguous copy kept in `copy`.
+const cv::Mat& contiguous(const cv::Mat& image, cv::Mat& copy) {
+  if (image.isContinuous()) return image;
+  image.copyTo(copy);
+  return copy;
+}
+
+}  // namespace
+
+float TsdfIntegrator::bandAt(float depth) const {
+  return std::max(static_cast<float>(truncation),
+                  static_cast<float>(truncation_sigmas) * kinectDepthSigma(depth));
+}
+
+float TsdfIntegrator::weightAt(float depth, float scale) const {
+  const float r = kinectDepthSigma(1.0f) / kinectDepthSigma(depth);
+  return r * r * scale;
+}
+
 // Allocates the blocks along each sampled pixel's ray within the band around its depth.
-void allocate(const TsdfIntegrator& tsdf, const std::vector<TsdfIntegrator::Sample>& samples,
-              int width, int height, const Eigen::Isometry3d& pose, VoxelMap& map) {
-  const CameraIntrinsics& cam = tsdf.camera;
+void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose,
+                              VoxelMap& map) const {
+  const CameraIntrinsics& cam = camera;
   const float block = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
   const float inv_block = 1.0f / block;
   const Eigen::Matrix3f R = pose.linear().cast<float>();
   const Eigen::Vector3f t = pose.translation().cast<float>();
-  const int stride = std::max(1, tsdf.allocation_stride);
+  const int stride = std::max(1, allocation_stride);
   Eigen::Vector3i last(INT32_MIN, INT32_MIN, INT32_MIN);
-  for (int v = 0; v < height; v += stride) {
-    const TsdfIntegrator::Sample* row = samples.data() + static_cast<std::size_t>(v) * width;
-    for (int u = 0; u < width; u += stride) {
-      const float d = row[u].depth;
+  for (int v = 0; v < depth.rows; v += stride) {
+    const float* row = depth.ptr<float>(v);
+    for (int u = 0; u < depth.cols; u += stride) {
+      const float d = row[u];
       if (!(d > 0.0f)) continue;
-      const float band = row[u].band;
+      const float band = bandAt(d);
       const Eigen::Vector3f ray =
           R * Eigen::Vector3f(static_cast<float>((u - cam.cx) / cam.fx),
                               static_cast<float>((v - cam.cy) / cam.fy), 1.0f);
@@ -54,12 +78,11 @@ void allocate(const TsdfIntegrator& tsdf, const std::vector<TsdfIntegrator::Samp
 // measured, beyond its band (in distance to the surface). Allocation only reaches the band around
 // each measurement, so without this an object that went away would never be updated again. Scans
 // the blocks' coordinates (a compact array), not the blocks.
-void touchSeenThrough(const TsdfIntegrator& tsdf,
-                      const std::vector<TsdfIntegrator::Sample>& samples, int width, int height,
-                      const Eigen::Isometry3f& world_to_camera, VoxelMap& map) {
-  const CameraIntrinsics& cam = tsdf.camera;
-  const float fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
-  const float cx = static_cast<float>(cam.cx) + 0.5f, cy = static_cast<float>(cam.cy) + 0.5f;
+void TsdfIntegrator::touchSeenThrough(const cv::Mat& depth,
+                                      const Eigen::Isometry3f& world_to_camera,
+                                      VoxelMap& map) const {
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   const float edge = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
   const float half_diagonal = 0.5f * std::sqrt(3.0f) * edge;
   const std::vector<Eigen::Vector3i>& coordinates = map.blockCoordinates();
@@ -69,27 +92,18 @@ void touchSeenThrough(const TsdfIntegrator& tsdf,
         world_to_camera * ((coordinates[i].cast<float>() + Eigen::Vector3f::Constant(0.5f)) * edge);
     if (c.z() <= 0.0f) continue;
     const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
-    if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(width) &&
-          v < static_cast<float>(height)))
+    if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(depth.cols) &&
+          v < static_cast<float>(depth.rows)))
       continue;
-    const TsdfIntegrator::Sample& s =
-        samples[static_cast<std::size_t>(v) * width + static_cast<std::size_t>(u)];
-    if (s.depth > 0.0f && (s.depth - c.z() + half_diagonal) * s.scale >= s.band)
+    const int ui = static_cast<int>(u), vi = static_cast<int>(v);
+    const float d = depth.ptr<float>(vi)[ui];
+    if (d > 0.0f && (d - c.z() + half_diagonal) * incidenceAt(ui, vi) >= bandAt(d))
       map.touchExisting(i);
   }
 }
 
-std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) {
-  const float mixed = old_value + alpha * (static_cast<float>(new_value) - old_value);
-  return static_cast<std::uint8_t>(std::clamp(mixed + 0.5f, 0.0f, 255.0f));
-}
-
-}  // namespace
-
-void TsdfIntegrator::prepareSamples(const cv::Mat& depth, WorkerPool* pool) {
+void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   const int width = depth.cols, height = depth.rows;
-  samples_.resize(static_cast<std::size_t>(width) * height);
-  const float sigma_at_1m = kinectDepthSigma(1.0f);
   const float min_cos = static_cast<float>(std::clamp(min_incidence_cosine, 1e-3, 1.0));
 
   // Incidence varies slowly across a surface, so it is taken on a grid of cells of cell x cell
@@ -97,20 +111,55 @@ void TsdfIntegrator::prepareSamples(const cv::Mat& depth, WorkerPool* pool) {
   // either side. Averaging matters: a single pixel's noise at 3 m (sigma 1.4 cm, twice the pixel
   // spacing) would make every surface look seen head-on.
   const int cell = std::max(1, normal_cell);
-  const cv::Size grid((width + cell - 1) / cell, (height + cell - 1) / cell);
-  cv::compare(depth, 0.0f, valid_, cv::CMP_GT);
-  valid_.convertTo(valid_float_, CV_32F, 1.0 / 255.0);
-  cv::resize(depth, depth_mean_, grid, 0, 0, cv::INTER_AREA);
-  cv::resize(valid_float_, valid_mean_, grid, 0, 0, cv::INTER_AREA);
-  cosine_.create(grid, CV_32F);
+  grid_width_ = (width + cell - 1) / cell;
+  grid_height_ = (height + cell - 1) / cell;
+  const std::size_t cells = static_cast<std::size_t>(grid_width_) * grid_height_;
+  cell_depth_.resize(cells);
+  cell_count_.resize(cells);
+  cosine_.resize(cells);
+  cell_row_.resize(static_cast<std::size_t>(height));
+  cell_column_.resize(static_cast<std::size_t>(width));
+  for (int v = 0; v < height; ++v) cell_row_[v] = (v / cell) * grid_width_;
+  for (int u = 0; u < width; ++u) cell_column_[u] = u / cell;
+
+  const std::size_t tasks =
+      static_cast<std::size_t>((grid_height_ + kCellRowsPerTask - 1) / kCellRowsPerTask);
+  auto run = [&](auto&& task) {
+    if (pool)
+      pool->run(tasks, task);
+    else
+      for (std::size_t i = 0; i < tasks; ++i) task(i);
+  };
+  // Mean depth of each cell (sum and count of the pixels with depth).
+  run([&](std::size_t task) {
+    const int first = static_cast<int>(task) * kCellRowsPerTask;
+    const int last = std::min(grid_height_, first + kCellRowsPerTask);
+    std::fill(cell_depth_.begin() + first * grid_width_, cell_depth_.begin() + last * grid_width_,
+              0.0f);
+    std::fill(cell_count_.begin() + first * grid_width_, cell_count_.begin() + last * grid_width_,
+              0);
+    for (int v = first * cell; v < std::min(height, last * cell); ++v) {
+      const float* in = depth.ptr<float>(v);
+      float* sums = cell_depth_.data() + cell_row_[v];
+      int* counts = cell_count_.data() + cell_row_[v];
+      for (int u = 0; u < width; ++u) {
+        const bool measured = in[u] > 0.0f;
+        sums[cell_column_[u]] += measured ? in[u] : 0.0f;
+        counts[cell_column_[u]] += measured ? 1 : 0;
+      }
+    }
+  });
+
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
-  // The camera-frame point at the centre of cell (i, j), false where the cell holds no depth.
+  // The camera-frame point at the centre of cell (i, j), false where a quarter of the cell or
+  // less holds depth.
   auto point = [&](int i, int j, Eigen::Vector3f& p) {
-    if (i < 0 || j < 0 || i >= grid.width || j >= grid.height) return false;
-    const float share = valid_mean_.ptr<float>(j)[i];
-    if (share < 0.25f) return false;
-    const float d = depth_mean_.ptr<float>(j)[i] / share;
+    if (i < 0 || j < 0 || i >= grid_width_ || j >= grid_height_) return false;
+    const std::size_t at = static_cast<std::size_t>(j) * grid_width_ + i;
+    const int pixels = std::min(cell, width - i * cell) * std::min(cell, height - j * cell);
+    if (4 * cell_count_[at] < pixels) return false;
+    const float d = cell_depth_[at] / static_cast<float>(cell_count_[at]);
     const float u = (static_cast<float>(i) + 0.5f) * static_cast<float>(cell) - 0.5f;
     const float v = (static_cast<float>(j) + 0.5f) * static_cast<float>(cell) - 0.5f;
     p = Eigen::Vector3f((u - cx) / fx * d, (v - cy) / fy * d, d);
@@ -123,57 +172,35 @@ void TsdfIntegrator::prepareSamples(const cv::Mat& depth, WorkerPool* pool) {
     point(i - di, j - dj, before);
     return Eigen::Vector3f(after - before);
   };
-  for (int j = 0; j < grid.height; ++j) {
-    float* out = cosine_.ptr<float>(j);
-    for (int i = 0; i < grid.width; ++i) {
-      Eigen::Vector3f p;
-      out[i] = 1.0f;
-      if (!point(i, j, p)) continue;
-      const Eigen::Vector3f normal = difference(i, j, 1, 0, p).cross(difference(i, j, 0, 1, p));
-      const float n = normal.norm();
-      if (n > 0.0f) out[i] = std::max(std::abs(normal.dot(p)) / (n * p.norm()), min_cos);
-    }
-  }
-
-  const float band_floor = static_cast<float>(truncation);
-  const float band_sigmas = static_cast<float>(truncation_sigmas);
-  auto rows = [&](std::size_t task) {
-    const int first = static_cast<int>(task) * kRowsPerTask;
-    const int last = std::min(height, first + kRowsPerTask);
-    for (int v = first; v < last; ++v) {
-      const float* in = depth.ptr<float>(v);
-      const float* cosines = cosine_.ptr<float>(v / cell);
-      Sample* out = samples_.data() + static_cast<std::size_t>(v) * width;
-      for (int u = 0; u < width; ++u) {
-        const float d = in[u];
-        const float sigma = kinectDepthSigma(d);
-        const float r = sigma_at_1m / sigma;
-        const float scale = cosines[u / cell];
-        const bool measured = d > 0.0f;
-        out[u].depth = measured ? d : 0.0f;
-        out[u].band = std::max(band_floor, band_sigmas * sigma);
-        out[u].scale = scale;
-        out[u].weight = r * r * scale;
+  run([&](std::size_t task) {
+    const int first = static_cast<int>(task) * kCellRowsPerTask;
+    const int last = std::min(grid_height_, first + kCellRowsPerTask);
+    for (int j = first; j < last; ++j) {
+      float* out = cosine_.data() + static_cast<std::size_t>(j) * grid_width_;
+      for (int i = 0; i < grid_width_; ++i) {
+        Eigen::Vector3f p;
+        out[i] = 1.0f;
+        if (!point(i, j, p)) continue;
+        const Eigen::Vector3f normal = difference(i, j, 1, 0, p).cross(difference(i, j, 0, 1, p));
+        const float n = normal.norm();
+        if (n > 0.0f) out[i] = std::max(std::abs(normal.dot(p)) / (n * p.norm()), min_cos);
       }
     }
-  };
-  const std::size_t tasks = static_cast<std::size_t>((height + kRowsPerTask - 1) / kRowsPerTask);
-  if (pool)
-    pool->run(tasks, rows);
-  else
-    for (std::size_t i = 0; i < tasks; ++i) rows(i);
+  });
 }
 
-void TsdfIntegrator::integrate(const cv::Mat& depth, const cv::Mat& color_bgr,
+void TsdfIntegrator::integrate(const cv::Mat& depth_in, const cv::Mat& color_in,
                                const Eigen::Isometry3d& pose, VoxelMap& map, WorkerPool* pool) {
-  CV_Assert(depth.type() == CV_32FC1 && color_bgr.type() == CV_8UC3 &&
-            color_bgr.size() == depth.size());
-  prepareSamples(depth, pool);
+  CV_Assert(depth_in.type() == CV_32FC1 && color_in.type() == CV_8UC3 &&
+            color_in.size() == depth_in.size());
+  const cv::Mat& depth = contiguous(depth_in, depth_);
+  const cv::Mat& color_bgr = contiguous(color_in, color_);
+  prepareIncidence(depth, pool);
   map.beginIntegration();
   const Eigen::Isometry3f world_to_camera = pose.inverse().cast<float>();
   if (map.integrations() % std::max(1, seen_through_every) == 0)
-    touchSeenThrough(*this, samples_, depth.cols, depth.rows, world_to_camera, map);
-  allocate(*this, samples_, depth.cols, depth.rows, pose, map);
+    touchSeenThrough(depth, world_to_camera, map);
+  allocate(depth, pose, map);
 
   const Eigen::Matrix3f Rcw = world_to_camera.linear();
   const float voxel = static_cast<float>(map.voxelSize());
@@ -181,8 +208,9 @@ void TsdfIntegrator::integrate(const cv::Mat& depth, const cv::Mat& color_bgr,
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   const int width = depth.cols;
-  const float sigma_at_1m = kinectDepthSigma(1.0f);
   const float fwidth = static_cast<float>(depth.cols), fheight = static_cast<float>(depth.rows);
+  const float* depth_px = depth.ptr<float>();
+  const std::uint8_t* color_px = color_bgr.ptr<std::uint8_t>();
   constexpr int kEdge = VoxelMap::kBlockEdge;
   const std::vector<std::uint32_t>& touched = map.touchedBlocks();
 
@@ -201,7 +229,7 @@ void TsdfIntegrator::integrate(const cv::Mat& depth, const cv::Mat& color_bgr,
           // A row of voxels projected in one go (no branches: the compiler vectorises it), then
           // each updated from its pixel.
           float depth_of[kEdge];
-          int pixel_of[kEdge];
+          int u_of[kEdge], v_of[kEdge];
           for (int x = 0; x < kEdge; ++x) {
             const float px = start.x() + static_cast<float>(x) * dx.x();
             const float py = start.y() + static_cast<float>(x) * dx.y();
@@ -211,31 +239,30 @@ void TsdfIntegrator::integrate(const cv::Mat& depth, const cv::Mat& color_bgr,
             const float v = fy * py * inv_z + cy;
             const bool inside = pz > 0.0f && u >= 0.0f && v >= 0.0f && u < fwidth && v < fheight;
             depth_of[x] = pz;
-            pixel_of[x] = inside ? static_cast<int>(v) * width + static_cast<int>(u) : -1;
+            u_of[x] = inside ? static_cast<int>(u) : -1;
+            v_of[x] = inside ? static_cast<int>(v) : 0;
           }
           VoxelMap::Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
           for (int x = 0; x < kEdge; ++x) {
-            if (pixel_of[x] < 0) continue;
-            const Sample& s = samples_[static_cast<std::size_t>(pixel_of[x])];
-            if (!(s.depth > 0.0f)) continue;
-            const float sdf = (s.depth - depth_of[x]) * s.scale;  // to the surface, not the pixel
-            if (sdf < -s.band) continue;  // hidden behind the surface: nothing known
-            const bool near = sdf < s.band;
+            if (u_of[x] < 0) continue;
+            const std::size_t pixel = static_cast<std::size_t>(v_of[x]) * width + u_of[x];
+            const float d = depth_px[pixel];
+            if (!(d > 0.0f)) continue;
+            const float scale = incidenceAt(u_of[x], v_of[x]);
+            const float sdf = (d - depth_of[x]) * scale;  // to the surface, not the pixel
+            const float band = bandAt(d);
+            if (sdf < -band) continue;  // hidden behind the surface: nothing known
+            const bool near = sdf < band;
             // Free space: as sure as a measurement at the voxel's own depth would be (a far
             // surface seen through a voxel leaves no doubt that it is empty).
-            float w = s.weight;
-            if (!near) {
-              const float r = sigma_at_1m / kinectDepthSigma(depth_of[x]);
-              w = r * r * s.scale;
-            }
+            const float w = weightAt(near ? d : depth_of[x], scale);
             VoxelMap::Voxel& voxel_ref = row[x];
             const float total = voxel_ref.weight + w;
             const float alpha = w / total;
-            voxel_ref.sdf += alpha * (std::min(sdf, s.band) - voxel_ref.sdf);
+            voxel_ref.sdf += alpha * (std::min(sdf, band) - voxel_ref.sdf);
             voxel_ref.weight = total;
             if (near) {  // near the surface: its colour
-              const cv::Vec3b& c =
-                  color_bgr.ptr<cv::Vec3b>(pixel_of[x] / width)[pixel_of[x] % width];
+              const std::uint8_t* c = color_px + 3 * pixel;
               voxel_ref.r = blend(voxel_ref.r, c[2], alpha);
               voxel_ref.g = blend(voxel_ref.g, c[1], alpha);
               voxel_ref.b = blend(voxel_ref.b, c[0], alpha);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <vector>
 
@@ -76,6 +77,7 @@ class Mapper {
   AnchoredTrajectory keyframes_;
   PoseSink* keyframe_sink_;  // keyframes_ or the caller's
   RunStats& stats_;
+  std::chrono::steady_clock::time_point next_count_{};  // when the point count is refreshed
 };
 
 }  // namespace rgbdmap

@@ -46,18 +46,27 @@ struct TsdfIntegrator {
   void integrate(const cv::Mat& depth, const cv::Mat& color_bgr, const Eigen::Isometry3d& pose,
                  VoxelMap& map, WorkerPool* pool = nullptr);
 
-  // What fusion needs of one pixel, computed once per image instead of once per voxel.
-  struct Sample {
-    float depth = 0.0f;   // m, 0 = none
-    float band = 0.0f;    // m: updates within +-band of the depth
-    float scale = 1.0f;   // distance to the surface per distance along the ray: cos(incidence)
-    float weight = 0.0f;  // scale / sigma^2, 1 at 1 m head-on
-  };
+  // What fusion makes of a measured depth: the band it updates (+-band around it) and its
+  // weight, scale / sigma^2 relative to a head-on measurement at 1 m (scale: the distance to the
+  // surface per distance along the ray, cos(incidence)). Computed where needed rather than stored
+  // per pixel: a per-pixel table was four times the depth image and fusion waited on its cache
+  // misses.
+  float bandAt(float depth) const;
+  float weightAt(float depth, float scale) const;
 
  private:
-  void prepareSamples(const cv::Mat& depth, WorkerPool* pool);
-  std::vector<Sample> samples_;                                     // row-major, one per pixel
-  cv::Mat valid_, valid_float_, depth_mean_, valid_mean_, cosine_;  // incidence grid
+  void prepareIncidence(const cv::Mat& depth, WorkerPool* pool);
+  // cos(incidence) of pixel (u, v), clamped at min_incidence_cosine.
+  float incidenceAt(int u, int v) const { return cosine_[cell_row_[v] + cell_column_[u]]; }
+  void allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose, VoxelMap& map) const;
+  void touchSeenThrough(const cv::Mat& depth, const Eigen::Isometry3f& world_to_camera,
+                        VoxelMap& map) const;
+
+  cv::Mat depth_, color_;                    // continuous copies, made only when the input is not
+  std::vector<float> cell_depth_, cosine_;   // incidence grid, row-major: depth sum, then cosine
+  std::vector<int> cell_count_;              // pixels with depth in each cell
+  std::vector<int> cell_row_, cell_column_;  // pixel row / column -> its cell's offset in the grid
+  int grid_width_ = 0, grid_height_ = 0;
 };
 
 }  // namespace rgbdmap
