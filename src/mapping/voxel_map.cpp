@@ -70,9 +70,25 @@ std::uint32_t VoxelMap::touchBlock(const Eigen::Vector3i& block_coords) {
       coordinates_[slot] = block_coords;
     }
     blocks_[slot].origin = block_coords * kBlockEdge;
+    link(slot, block_coords);
   }
   touchExisting(it->second);
   return it->second;
+}
+
+void VoxelMap::link(std::uint32_t index, const Eigen::Vector3i& block_coords) {
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3i at = block_coords;
+      at[axis] += side == 0 ? -1 : 1;
+      std::uint64_t key;
+      if (!packKey(at, key)) continue;
+      const auto it = block_index_.find(key);
+      if (it == block_index_.end()) continue;
+      blocks_[index].neighbours[2 * axis + side] = it->second;
+      blocks_[it->second].neighbours[2 * axis + (1 - side)] = index;
+    }
+  }
 }
 
 void VoxelMap::touchExisting(std::uint32_t index) {
@@ -98,6 +114,10 @@ std::size_t VoxelMap::pruneFreeSpace(std::uint64_t idle, float clearance) {
     points_ -= b.surface_points;
     b.surface_points = 0;
     b.in_use = false;
+    for (int n = 0; n < 6; ++n) {
+      if (b.neighbours[n] != kNone) blocks_[b.neighbours[n]].neighbours[n ^ 1] = kNone;
+      b.neighbours[n] = kNone;
+    }
     coordinates_[i] = kNoBlock;
     free_.push_back(i);
     ++freed;
@@ -106,23 +126,10 @@ std::size_t VoxelMap::pruneFreeSpace(std::uint64_t idle, float clearance) {
   return freed;
 }
 
-const VoxelMap::Block* VoxelMap::findBlock(const Eigen::Vector3i& block_coords) const {
-  std::uint64_t key;
-  if (!packKey(block_coords, key)) return nullptr;
-  const auto it = block_index_.find(key);
-  return it == block_index_.end() ? nullptr : &blocks_[it->second];
-}
-
 VoxelMap::Neighbours VoxelMap::neighboursOf(const Block& block) const {
-  const Eigen::Vector3i c = block.origin / kBlockEdge;
   Neighbours n;
-  for (int axis = 0; axis < 3; ++axis) {
-    for (int side = 0; side < 2; ++side) {
-      Eigen::Vector3i at = c;
-      at[axis] += side == 0 ? -1 : 1;
-      n[2 * axis + side] = findBlock(at);
-    }
-  }
+  for (int i = 0; i < 6; ++i)
+    n[i] = block.neighbours[i] == kNone ? nullptr : &blocks_[block.neighbours[i]];
   return n;
 }
 
@@ -155,25 +162,29 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
           continue;
         const bool front = v.sdf >= 0.0f;
         bool surface = false;
-        Eigen::Vector3f gradient;
+        const Voxel* lower[3];
+        const Voxel* upper[3];
         for (int axis = 0; axis < 3; ++axis) {
-          const Voxel* lower = neighbour(x, y, z, axis, 0);
-          const Voxel* upper = neighbour(x, y, z, axis, 1);
-          for (const Voxel* n : {lower, upper}) {
+          lower[axis] = neighbour(x, y, z, axis, 0);
+          upper[axis] = neighbour(x, y, z, axis, 1);
+          for (const Voxel* n : {lower[axis], upper[axis]}) {
             if (n == nullptr || (n->sdf >= 0.0f) == front) continue;
             const float own = std::abs(v.sdf), other = std::abs(n->sdf);
             if (own < other || (own == other && front)) surface = true;
           }
-          if (lower && upper)
-            gradient[axis] = (upper->sdf - lower->sdf) / (2.0f * voxel);
-          else if (upper)
-            gradient[axis] = (upper->sdf - v.sdf) / voxel;
-          else if (lower)
-            gradient[axis] = (v.sdf - lower->sdf) / voxel;
+        }
+        if (!surface) continue;
+        Eigen::Vector3f gradient;
+        for (int axis = 0; axis < 3; ++axis) {
+          if (lower[axis] && upper[axis])
+            gradient[axis] = (upper[axis]->sdf - lower[axis]->sdf) / (2.0f * voxel);
+          else if (upper[axis])
+            gradient[axis] = (upper[axis]->sdf - v.sdf) / voxel;
+          else if (lower[axis])
+            gradient[axis] = (v.sdf - lower[axis]->sdf) / voxel;
           else
             gradient[axis] = 0.0f;
         }
-        if (!surface) continue;
         Eigen::Vector3f p = (block.origin + Eigen::Vector3i(x, y, z)).cast<float>();
         p = (p + Eigen::Vector3f::Constant(0.5f)) * voxel;
         // Onto the zero level of the locally linear field, at most a voxel away.
@@ -199,17 +210,8 @@ void VoxelMap::finishIntegration() {
   };
   for (const std::uint32_t i : touched_) {
     due(i);
-    const Eigen::Vector3i c = blocks_[i].origin / kBlockEdge;
-    for (int axis = 0; axis < 3; ++axis) {
-      for (const int step : {-1, 1}) {
-        Eigen::Vector3i at = c;
-        at[axis] += step;
-        std::uint64_t key;
-        if (!packKey(at, key)) continue;
-        const auto it = block_index_.find(key);
-        if (it != block_index_.end()) due(it->second);
-      }
-    }
+    for (const std::uint32_t n : blocks_[i].neighbours)
+      if (n != kNone) due(n);
   }
   touched_.clear();
 }

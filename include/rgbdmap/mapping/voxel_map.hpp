@@ -45,6 +45,7 @@ class VoxelMap {
   static constexpr int kBlockBits = 3;
   static constexpr int kBlockEdge = 1 << kBlockBits;  // voxels per block edge
   static constexpr int kBlockVoxels = kBlockEdge * kBlockEdge * kBlockEdge;
+  static constexpr std::uint32_t kNone = UINT32_MAX;
   struct Block {
     Eigen::Vector3i origin = Eigen::Vector3i::Zero();  // voxel coordinates of its first voxel
     std::array<Voxel, kBlockVoxels> voxels;            // x fastest, then y, then z
@@ -52,6 +53,9 @@ class VoxelMap {
     std::uint64_t touched_in = 0;      // the last integration that updated it
     bool count_due = false;            // it or a neighbour changed since it was counted
     bool in_use = true;                // false: pruned, its slot waits for a new block
+    // Indices of the 6 face neighbours (-x, +x, -y, +y, -z, +z), kNone where there is none:
+    // counting and extraction look at them for every block, fusion marks them after each image.
+    std::array<std::uint32_t, 6> neighbours{kNone, kNone, kNone, kNone, kNone, kNone};
   };
 
   // Voxels seen in fewer than min_observations frames are kept (more may come) but not
@@ -114,7 +118,8 @@ class VoxelMap {
   // The 6 face neighbours of a block (-x, +x, -y, +y, -z, +z), nullptr where none.
   using Neighbours = std::array<const Block*, 6>;
   Neighbours neighboursOf(const Block& block) const;
-  const Block* findBlock(const Eigen::Vector3i& block_coords) const;
+  // Links a new block with the blocks next to it, both ways.
+  void link(std::uint32_t index, const Eigen::Vector3i& block_coords);
   // Calls emit(position, voxel) for each surface voxel of the block, in voxel order.
   template <typename Emit>
   void forEachSurfaceVoxel(const Block& block, const Neighbours& neighbours, Emit&& emit) const;
