@@ -10,11 +10,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/image_file.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/fakenect_dump.hpp"
@@ -98,10 +98,10 @@ class TumList {
 // Writes an image beside its final name and renames it, so no half-written PNG is ever listed.
 void writePng(const cv::Mat& image, const fs::path& path) {
   const fs::path partial = fs::path(path).replace_extension(".partial.png");
-  const std::vector<int> params{cv::IMWRITE_PNG_COMPRESSION, 1};  // lossless; fast enough for live
+  std::string error;
   bool ok = false;
   try {
-    ok = cv::imwrite(partial.string(), image, params);
+    ok = writeImageFile(partial.string(), image, error, 1);  // lossless; fast enough for live
   } catch (const cv::Exception&) {
     ok = false;
   }

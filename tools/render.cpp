@@ -4,9 +4,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "rgbdmap/base/image_file.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
@@ -207,10 +207,7 @@ bool renderMapFile(const std::string& map_path, const std::string& trajectory_pa
   try {
     const cv::Mat image =
         mesh.empty() ? renderer.render(cloud, trajectory) : renderer.render(mesh, trajectory);
-    if (!cv::imwrite(png_path, image)) {
-      error = png_path + ": cannot write image";
-      return false;
-    }
+    if (!writeImageFile(png_path, image, error)) return false;
   } catch (const cv::Exception& e) {
     error = png_path + ": cannot write image (" + e.err + ")";
     return false;

@@ -72,6 +72,7 @@ std::string RunStats::toJson() const {
       << "  \"peak_rss_mb\": " << peak_rss_mb << ",\n"
       << "  \"mesh_triangles\": " << mesh_triangles << ",\n"
       << "  \"mesh_memory_mb\": " << mesh_memory_mb << ",\n"
+      << "  \"map_memory_mb\": " << map_memory_mb << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);
   latency("queue_wait", queue_latency, false);

@@ -85,6 +85,12 @@ void Mapper::fuse(const Frame& keyframe) {
                         kPruneClearanceVoxels * static_cast<float>(voxel_size_));
 }
 
+std::size_t Mapper::memoryBytes() const {
+  std::size_t bytes = map_.memoryBytes();
+  for (const Submap& submap : closed_) bytes += submap.points.memoryBytes();
+  return bytes;
+}
+
 std::shared_ptr<MapCloud> Mapper::snapshot() const {
   auto cloud = std::make_shared<MapCloud>();
   if (!corrections_ || (closed_.empty() && active_anchor_ < 0)) {

@@ -321,6 +321,7 @@ int Pipeline::run(RunControl& control) {
   }
   stats_.peak_rss_mb = peakRssMb();
   stats_.mesh_memory_mb = static_cast<double>(mapper.meshMemoryBytes()) / (1024.0 * 1024.0);
+  stats_.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);

@@ -12,10 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/image_file.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -119,13 +119,8 @@ class SurfaceSampler {
 };
 
 void writeImage(const std::string& path, const cv::Mat& image, int compression) {
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, image, {cv::IMWRITE_PNG_COMPRESSION, compression});
-  } catch (const cv::Exception& e) {
-    throw InputError(path + ": cannot write image (" + e.err + ")");
-  }
-  if (!ok) throw InputError(path + ": cannot write image");
+  std::string error;
+  if (!writeImageFile(path, image, error, compression)) throw InputError(error);
 }
 
 void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,

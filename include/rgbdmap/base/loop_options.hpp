@@ -13,8 +13,8 @@ struct LoopOptions {
   // estimated pose is near the new keyframe's and looks the same way. The radius and the angle
   // grow with the path walked between the two, as odometry drift does.
   int recent_keyframes = 10;
-  double search_radius = 0.6;    // m
-  double max_view_angle = 0.70;  // rad between the optical axes
+  double search_radius = 0.6;     // m
+  double max_view_angle = 0.70;   // rad between the optical axes
   double drift_per_metre = 0.08;  // m (and rad) of allowance per metre walked between the two
   int max_candidates = 3;         // the best-matching few are verified geometrically
   // A keyframe is remembered as a place only if no remembered place is this close (m, rad):

@@ -75,6 +75,7 @@ struct RunStats {
   LatencyHistogram mesh_write_latency;
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
   double mesh_memory_mb = 0.0;  // the closed submaps' meshes kept at the end (loop closure)
+  double map_memory_mb = 0.0;   // the map at the end: TSDF blocks and index, closed submaps' points
 
   double wall_seconds = 0.0;
   double peak_rss_mb = 0.0;

@@ -51,6 +51,8 @@ class Mapper {
   // first, where submaps overlap the newer one's triangles are kept).
   std::shared_ptr<TriangleMesh> meshSnapshot() const;
   std::size_t meshMemoryBytes() const { return closed_mesh_bytes_; }  // the closed submaps'
+  // The TSDF's blocks and index, and the closed submaps' points.
+  std::size_t memoryBytes() const;
 
  private:
   struct Submap {
