@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <opencv2/core.hpp>
 #include <optional>
 
 namespace rgbdmap {
@@ -189,9 +190,8 @@ void decodeRow(std::uint8_t filter, std::uint8_t* row, const std::uint8_t* prior
 
 template <class Format>
 void decodeImage(std::uint8_t* scanlines, std::size_t width, std::size_t height,
-                 const std::uint8_t* zero_row, int type, cv::Mat& out) {
+                 const std::uint8_t* zero_row, cv::Mat& out) {
   const std::size_t stride = 1 + width * Format::kBytes;
-  out.create(static_cast<int>(height), static_cast<int>(width), type);
   const std::uint8_t* prior = zero_row;
   for (std::size_t y = 0; y < height; ++y) {
     std::uint8_t* line = scanlines + y * stride;
@@ -296,11 +296,15 @@ PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size
   const std::size_t pixel_bytes = static_cast<std::size_t>(bytesPerPixel(*layout));
   const std::size_t stride = 1 + std::size_t{width} * pixel_bytes;
   const std::size_t scan_size = stride * height;
-  const std::string image_size = std::to_string(width) + "x" + std::to_string(height);
+  const auto image_size = [&] { return std::to_string(width) + "x" + std::to_string(height); };
   if (scan_size > (compressed_size + kZlibSlack) * kMaxInflateRatio)
     return corrupt(std::to_string(compressed_size) + " bytes of image data cannot hold a " +
-                   image_size + " image");
-  if (scanlines_.size() < scan_size) scanlines_.resize(scan_size);
+                   image_size() + " image");
+  try {
+    if (scanlines_.size() < scan_size) scanlines_.resize(scan_size);
+  } catch (const std::bad_alloc&) {
+    return corrupt("no memory for a " + image_size() + " image");
+  }
   // With no actual-size pointer libdeflate insists on exactly scan_size bytes, and it checks
   // the stream's Adler-32.
   switch (libdeflate_zlib_decompress(inflater_.get(), compressed_.data(), compressed_size,
@@ -309,14 +313,14 @@ PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size
       break;
     case LIBDEFLATE_SHORT_OUTPUT:
       return corrupt("the image data inflates to fewer than the " + std::to_string(scan_size) +
-                     " bytes of a " + image_size + " image");
+                     " bytes of a " + image_size() + " image");
     case LIBDEFLATE_INSUFFICIENT_SPACE:
       // libpng decodes such a file with a warning ("Too much image data"): it stays OpenCV's.
       return Status::kUnsupported;
     default:
       return corrupt("the compressed image data is corrupt (bad deflate stream or checksum)");
   }
-  // Checked before anything is written, so that a failure leaves `out` as it was.
+  // Checked before `out` is touched, so that a failure leaves it as it was.
   for (std::size_t y = 0; y < height; ++y) {
     const std::uint8_t filter = scanlines_[y * stride];
     if (filter > kPaeth)
@@ -324,19 +328,25 @@ PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size
                      " (0 to 4 are defined)");
   }
   if (zero_row_.size() < stride) zero_row_.resize(stride);  // only ever read
+  try {
+    out.create(static_cast<int>(height), static_cast<int>(width),
+               *layout == Layout::kGrey16 ? CV_16UC1 : CV_8UC3);
+  } catch (const cv::Exception&) {
+    return corrupt("no memory for a " + image_size() + " image");
+  }
 
   switch (*layout) {
     case Layout::kRgb8:
-      decodeImage<RgbToBgr>(scanlines_.data(), width, height, zero_row_.data(), CV_8UC3, out);
+      decodeImage<RgbToBgr>(scanlines_.data(), width, height, zero_row_.data(), out);
       break;
     case Layout::kRgba8:
-      decodeImage<RgbaToBgr>(scanlines_.data(), width, height, zero_row_.data(), CV_8UC3, out);
+      decodeImage<RgbaToBgr>(scanlines_.data(), width, height, zero_row_.data(), out);
       break;
     case Layout::kGrey8:
-      decodeImage<GreyToBgr>(scanlines_.data(), width, height, zero_row_.data(), CV_8UC3, out);
+      decodeImage<GreyToBgr>(scanlines_.data(), width, height, zero_row_.data(), out);
       break;
     case Layout::kGrey16:
-      decodeImage<Grey16ToHost>(scanlines_.data(), width, height, zero_row_.data(), CV_16UC1, out);
+      decodeImage<Grey16ToHost>(scanlines_.data(), width, height, zero_row_.data(), out);
       break;
   }
   return Status::kDecoded;
