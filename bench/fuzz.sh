@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every parser of outside input with libFuzzer (not part of CI): TUM lists and ground
 # truth, trajectory files, config YAML and --set, the PCD/PLY maps `render` and `evaluate` read,
-# the PLY meshes (--mesh) `render` and `view` read.
+# the PLY meshes (--mesh) `render` and `view` read, the PNGs of TUM folders (PngDecoder).
 # Each target runs for --seconds with ASan + UBSan; any crash, hang, leak or sanitizer report
 # fails the run and leaves the input in <build>/crashes/ (turn it into a regression test).
 #
@@ -33,7 +33,7 @@ fi
 [ -n "$fuzzer_lib" ] && [ -f "$fuzzer_lib" ] || {
   echo "fuzz.sh: libFuzzer is missing (apt-get install libclang-rt-14-dev)" >&2; exit 2; }
 
-targets="tum_lists trajectory config map_file mesh_file"
+targets="tum_lists trajectory config map_file mesh_file png_decoder"
 [ -n "$only" ] && targets="$only"
 
 mkdir -p "$build_dir"
@@ -46,7 +46,7 @@ cmake --build "$build_dir" -j2 --target $(for t in $targets; do printf 'fuzz_%s 
 data=../shared/data
 seeds="$build_dir/seeds"
 rm -rf "$seeds"
-mkdir -p "$seeds"/{tum_lists,trajectory,config,map_file,mesh_file} "$build_dir/crashes"
+mkdir -p "$seeds"/{tum_lists,trajectory,config,map_file,mesh_file,png_decoder} "$build_dir/crashes"
 for seq in "$data"/tum/*/; do
   name=$(basename "$seq")
   { head -c 3000 "$seq/rgb.txt"; printf '\001'; head -c 3000 "$seq/depth.txt"; printf '\001';
@@ -67,6 +67,13 @@ printf 'VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1
   printf 'element face 1\nproperty list uchar int vertex_indices\nend_header\n'
   head -c 45 /dev/zero
   printf '\003\000\000\000\000\001\000\000\000\002\000\000\000'; } >"$seeds/mesh_file/triangle.ply"
+
+# Two small PNGs (a mode byte first: 1 colour, 3 depth, CRCs recomputed): 4x3 RGB with the
+# Sub, Up and Paeth filters, 3x3 16-bit grey with Sub, Average and Paeth.
+printf '\001\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x04\x00\x00\x00\x03\x08\x02\x00\x00\x00\x3b\x96\x39\x91\x00\x00\x00\x32\x49\x44\x41\x54\x78\xda\x01\x27\x00\xd8\xff\x01\x44\x20\x82\x3c\xfd\xe6\xf1\xc2\x6b\x30\xf9\x0e\x02\xc7\xdd\x01\xe4\x88\x75\x34\xa2\x0f\x0b\x0d\x04\x04\xc3\x6e\xd8\x0e\x71\xe0\xfd\x77\xb0\x76\x70\xeb\x5e\x35\x12\x46\x82\x2d\xb8\x7f\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82' \
+  >"$seeds/png_decoder/rgb.png"
+printf '\003\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x03\x00\x00\x00\x03\x10\x00\x00\x00\x00\x23\xd3\x36\x20\x00\x00\x00\x1e\x49\x44\x41\x54\x78\xda\x63\x9c\xc2\x7d\xd5\x38\x7e\x3a\xb3\xed\xaa\x1b\x89\xb3\x27\xb2\xfc\x3f\x29\xf8\xb5\xe6\x1c\x00\x5e\xe5\x0a\x0a\x70\x75\xda\x46\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82' \
+  >"$seeds/png_decoder/depth.png"
 
 # An allocation larger than memory throws std::bad_alloc, as in a release build (a PCD header
 # may declare any number of points; the reader turns that into a message), instead of an ASan

@@ -5,13 +5,18 @@
 #include <pcl/filters/statistical_outlier_removal.h>
 
 #include <algorithm>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/base/png_decoder.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
@@ -112,6 +117,39 @@ void BM_TumLoadPngPair(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_TumLoadPngPair)->Unit(benchmark::kMillisecond);
+
+// Decoding alone, the same pair from memory into reused images: arg 0 cv::imdecode (libpng and
+// zlib), arg 1 PngDecoder (libdeflate), which TumSequence uses for such PNGs.
+void BM_PngDecodePair(benchmark::State& state) {
+  Fixture& f = fixture();
+  const auto read = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::vector<std::uint8_t> color_png = read((*f.sequence)[kFrameIndex].rgb_path);
+  const std::vector<std::uint8_t> depth_png = read((*f.sequence)[kFrameIndex].depth_path);
+  const bool ours = state.range(0) != 0;
+  rgbdmap::PngDecoder decoder;
+  cv::Mat color, depth;
+  std::string error;
+  for (auto _ : state) {
+    if (ours) {
+      using Mode = rgbdmap::PngDecoder::Mode;
+      if (decoder.decode(color_png.data(), color_png.size(), Mode::kColor, color, error) !=
+              rgbdmap::PngDecoder::Status::kDecoded ||
+          decoder.decode(depth_png.data(), depth_png.size(), Mode::kDepth, depth, error) !=
+              rgbdmap::PngDecoder::Status::kDecoded)
+        state.SkipWithError(("not decoded: " + error).c_str());
+    } else {
+      cv::imdecode(color_png, cv::IMREAD_COLOR, &color);
+      cv::imdecode(depth_png, cv::IMREAD_UNCHANGED, &depth);
+    }
+    benchmark::DoNotOptimize(color.data);
+    benchmark::DoNotOptimize(depth.data);
+  }
+  state.SetLabel(ours ? "PngDecoder" : "cv::imdecode");
+}
+BENCHMARK(BM_PngDecodePair)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Range, flying-pixel and speck filtering of a 640x480 depth image. The filter works in place,
 // so each iteration starts from a copy of the raw depth (a 1.2 MB memcpy, included).

@@ -7,7 +7,7 @@ packages=(
   libpcl-dev libopencv-dev libopencv-contrib-dev libeigen3-dev
   libopenni2-dev libfreenect-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
   libboost-dev libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev
-  libtsl-hopscotch-map-dev libceres-dev
+  libtsl-hopscotch-map-dev libceres-dev libdeflate-dev
   libvtk9-dev libx11-dev libgl-dev xvfb ccache
   # ROS 1 Noetic as Debian packages it: the ros/ adapter (rosbag: source, rgbdmap_node) and the
   # tools its tests drive (roscore, rosbag, rostopic).

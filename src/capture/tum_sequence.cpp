@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/opencv_codecs.hpp"
 #include "rgbdmap/base/text_lines.hpp"
 #include "rgbdmap/capture/association.hpp"
 
@@ -139,14 +140,35 @@ bool TumSequence::readImage(const std::string& path, ImageKind kind, cv::Mat& ou
   if (kind == ImageKind::kDepth && format != "PNG" && format != "TIFF")
     return fail("depth must be a 16-bit PNG or TIFF image",
                 format.empty() ? "" : " (this is " + format + ")");
-  if (kind == ImageKind::kColor && format.empty() && !cv::haveImageReader(path))
+  // Anything but PNG goes to OpenCV's codecs, a module loaded the first time it is needed.
+  const OpenCvCodecs* codecs = nullptr;
+  if (format != "PNG") {
+    std::string reason;
+    codecs = OpenCvCodecs::get(reason);
+    if (codecs == nullptr) return fail("cannot decode image", " (" + reason + ")");
+  }
+  if (kind == ImageKind::kColor && format.empty() && !codecs->canRead(path))
     return fail("not an image format OpenCV can read", "");
-  try {
-    // Decoding into `out` reuses its buffer when the size and type match.
-    cv::imdecode(file_buffer_, kind == ImageKind::kDepth ? cv::IMREAD_UNCHANGED : cv::IMREAD_COLOR,
-                 &out);
-  } catch (const cv::Exception& e) {
-    return fail("cannot decode image", " (" + e.err + ")");
+  // The PNGs recordings are made of decode faster on our own; every other PNG gets OpenCV's
+  // result as before. Either way decoding into `out` reuses its buffer when size and type match.
+  PngDecoder::Status png = PngDecoder::Status::kUnsupported;
+  if (format == "PNG") {
+    std::string reason;
+    png = png_decoder_.decode(
+        file_buffer_.data(), file_buffer_.size(),
+        kind == ImageKind::kDepth ? PngDecoder::Mode::kDepth : PngDecoder::Mode::kColor, out,
+        reason);
+    if (png == PngDecoder::Status::kCorrupt)
+      return fail("cannot decode image", " (" + reason + ")");
+  }
+  if (png == PngDecoder::Status::kUnsupported) {
+    std::string reason;
+    if (codecs == nullptr) codecs = OpenCvCodecs::get(reason);
+    if (codecs == nullptr) return fail("cannot decode image", " (" + reason + ")");
+    if (!codecs->decode(file_buffer_.data(), file_buffer_.size(),
+                        kind == ImageKind::kDepth ? cv::IMREAD_UNCHANGED : cv::IMREAD_COLOR, out,
+                        reason))
+      return fail("cannot decode image", " (" + reason + ")");
   }
   if (out.empty()) return fail("cannot decode image (corrupt or truncated)", "");
   if (kind == ImageKind::kDepth && out.type() != CV_16UC1)

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/png_decoder.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 
 namespace rgbdmap {
@@ -69,6 +70,7 @@ class TumSequence {
   std::size_t unmatched_color_ = 0;
   std::size_t unmatched_depth_ = 0;
   std::vector<unsigned char> file_buffer_;  // reused between loads
+  PngDecoder png_decoder_;                  // and its buffers
   cv::Mat raw_depth_;                       // 16-bit depth as decoded, reused
   std::string failure_reason_;
 };
