@@ -98,7 +98,8 @@ TEST(CheckpointSignal, SigintStopsDrainsAndSaves) {
   const std::string dir = test::freshDir();
   // A checkpoint after every keyframe tells when mapping is under way.
   std::vector<std::string> args = replayArgs(dir, "1");
-  args.insert(args.end(), {"--set", "checkpoint.every_keyframes=1"});
+  args.insert(args.end(),
+              {"--set", "checkpoint.every_keyframes=1", "--set", "checkpoint.min_seconds=0"});
   test::Process p(args, dir + "/log.txt");
   ASSERT_TRUE(waitFor(
       [&] {
@@ -175,7 +176,8 @@ TEST(CheckpointSignal, PeriodicCheckpointsByKeyframeCount) {
   const int code = test::run(
       test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
           "/map.pcd --rate max -q --no-render --stats " + dir +
-          "/stats.json --set checkpoint.every_keyframes=3 --set checkpoint.every_seconds=0",
+          "/stats.json --set checkpoint.every_keyframes=3 --set checkpoint.every_seconds=0"
+          " --set checkpoint.min_seconds=0",
       &output);
   ASSERT_EQ(code, 0) << output;
   // 10 keyframes: checkpoints after keyframes 3, 6 and 9, then the final save. The writer keeps

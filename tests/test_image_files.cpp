@@ -32,7 +32,8 @@ cv::Mat gradientImage(int rows, int cols, int type) {
         if (image.depth() == CV_8U)
           image.ptr<std::uint8_t>(v)[u * channels + c] = static_cast<std::uint8_t>(value);
         else
-          image.ptr<std::uint16_t>(v)[u * channels + c] = static_cast<std::uint16_t>(value * 257 + v);
+          image.ptr<std::uint16_t>(v)[u * channels + c] =
+              static_cast<std::uint16_t>(value * 257 + v);
       }
     }
   }

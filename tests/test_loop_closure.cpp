@@ -50,8 +50,8 @@ DriftedLoop driftedLoop(int n) {
   loop.odometry.push_back(loop.truth[0]);
   for (int i = 1; i < n; ++i) {
     Eigen::Isometry3d step = loop.truth[i - 1].inverse() * loop.truth[i];
-    step.translation() = step.translation() * 1.015 +
-                         Eigen::Vector3d(noise(random), noise(random), noise(random));
+    step.translation() =
+        step.translation() * 1.015 + Eigen::Vector3d(noise(random), noise(random), noise(random));
     step.linear() = step.linear() * Eigen::AngleAxisd(0.005, Eigen::Vector3d::UnitZ());
     loop.odometry.push_back(loop.odometry.back() * step);
     PoseGraph::Edge edge;
@@ -260,8 +260,7 @@ TEST(SurfaceCloud, KeepsPointsOfATenMetreSubmapTo0_15Millimetres) {
   points[5].position.x() = 1e6f;
   const SurfaceCloud wide(points);
   ASSERT_EQ(wide.size(), points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    EXPECT_EQ(wide[i].position, points[i].position);
+  for (std::size_t i = 0; i < points.size(); ++i) EXPECT_EQ(wide[i].position, points[i].position);
 }
 
 }  // namespace

@@ -62,15 +62,16 @@ MappingRun mapSequence(const std::string& sequence, const std::string& out, bool
       << output;
   run.precision = test::jsonNumber(test::readFile(out + "_map.json"), "precision");
   std::cout << (loops ? "loops on:  " : "loops off: ") << "ATE " << run.ate_m * 100
-            << " cm, keyframes " << run.keyframes_ate_m * 100 << " cm, precision "
-            << run.precision << ", loops accepted "
-            << test::jsonNumber(run.stats, "loops_accepted") << "\n";
+            << " cm, keyframes " << run.keyframes_ate_m * 100 << " cm, precision " << run.precision
+            << ", loops accepted " << test::jsonNumber(run.stats, "loops_accepted") << "\n";
   return run;
 }
 
 class Orbit : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { sequence_ = new std::string(test::sharedSynthetic("orbit", kOrbit)); }
+  static void SetUpTestSuite() {
+    sequence_ = new std::string(test::sharedSynthetic("orbit", kOrbit));
+  }
   static void TearDownTestSuite() {
     delete sequence_;
     sequence_ = nullptr;
@@ -161,8 +162,8 @@ TEST(Walk, ClosingLoopsRoundARoomKeepsEveryReportedLoopTrue) {
   const MappingRun off = mapSequence(sequence, dir + "/off", false);
   // Measured: on ATE 0.23 cm, precision 0.9997, 33 loops; off ATE 0.70 cm, precision 0.9969.
   EXPECT_GE(test::jsonNumber(on.stats, "loops_accepted"), 5);
-  EXPECT_EQ(test::jsonNumber(on.stats, "loops_rejected") + test::jsonNumber(on.stats, "frames_lost"),
-            0);
+  EXPECT_EQ(
+      test::jsonNumber(on.stats, "loops_rejected") + test::jsonNumber(on.stats, "frames_lost"), 0);
   EXPECT_LT(on.ate_m, 0.005);
   EXPECT_LT(on.ate_m, off.ate_m / 2);
   EXPECT_GE(on.precision, 0.995);

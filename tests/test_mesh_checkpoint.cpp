@@ -99,7 +99,7 @@ TEST(MeshCheckpoint, UnwritableMeshIsReportedAndTheMapStillSaved) {
   std::string output;
   EXPECT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
                           "/map.pcd --mesh " + dir + "/mesh.ply --rate max -q --no-render " +
-                          "--set checkpoint.every_keyframes=10",
+                          "--set checkpoint.every_keyframes=10 --set checkpoint.min_seconds=0",
                       &output),
             1)
       << output;

@@ -175,10 +175,11 @@ TEST(PipelineTracking, CheckpointsCarryThePerFrameTrajectory) {
   const std::string dir = test::freshDir();
   // Half speed (100 frames in ~6.6 s); a checkpoint every 3 keyframes (every 10th frame with
   // ground truth), so the first one holds at least 21 frames and comes well before the end.
-  test::Process p({test::binary(), "--source", "tum:" + test::tumDir(kRpy), "--out",
-                   dir + "/map.pcd", "--rate", "0.5", "--no-render", "-q", "--set",
-                   "checkpoint.every_keyframes=3", "--set", "checkpoint.every_seconds=0"},
-                  dir + "/log.txt");
+  test::Process p(
+      {test::binary(), "--source", "tum:" + test::tumDir(kRpy), "--out", dir + "/map.pcd", "--rate",
+       "0.5", "--no-render", "-q", "--set", "checkpoint.every_keyframes=3", "--set",
+       "checkpoint.every_seconds=0", "--set", "checkpoint.min_seconds=0"},
+      dir + "/log.txt");
   ASSERT_TRUE(waitFor([&] { return fs::exists(dir + "/map_trajectory.txt"); }, 120s))
       << test::readFile(dir + "/log.txt");
   // Files are renamed into place whole: what is there is one checkpoint's trajectory.

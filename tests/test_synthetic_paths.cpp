@@ -67,8 +67,7 @@ TEST(HandheldPath, IsStillTheDefaultOrbit) {
   EXPECT_EQ(options.path, "orbit");
   const auto path = makeCameraPath(scene.room(), options, 10.0);
   const HandheldPath orbit(scene.room(), options.seed, options.loop_seconds);
-  for (double t : {0.0, 1.7, 9.3})
-    EXPECT_TRUE(path->pose(t).isApprox(orbit.pose(t), 1e-15)) << t;
+  for (double t : {0.0, 1.7, 9.3}) EXPECT_TRUE(path->pose(t).isApprox(orbit.pose(t), 1e-15)) << t;
 }
 
 // One or two frames with exact depth, written with `options`; returns the folder.

@@ -274,6 +274,9 @@ std::vector<Config::Key> Config::keys() {
               "write a checkpoint every this many keyframes (0 = off)"),
       number("checkpoint.every_seconds", &checkpoint_every_seconds, 0, 1e9,
              "write a checkpoint every this many seconds (0 = off)"),
+      number("checkpoint.min_seconds", &checkpoint_min_seconds, 0, 1e9,
+             "checkpoints by keyframe count wait this long after the previous one (each writes "
+             "the whole map: every frame a keyframe, 50 keyframes would rewrite it every 2 s)"),
   };
 }
 

@@ -29,16 +29,6 @@ const cv::Mat& contiguous(const cv::Mat& image, cv::Mat& copy) {
 
 }  // namespace
 
-float TsdfIntegrator::bandAt(float depth) const {
-  return std::max(static_cast<float>(truncation),
-                  static_cast<float>(truncation_sigmas) * kinectDepthSigma(depth));
-}
-
-float TsdfIntegrator::weightAt(float depth, float scale) const {
-  const float r = kinectDepthSigma(1.0f) / kinectDepthSigma(depth);
-  return r * r * scale;
-}
-
 // Allocates the blocks along each sampled pixel's ray within the band around its depth.
 void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose,
                               VoxelMap& map) const {

@@ -260,7 +260,8 @@ int Pipeline::run(RunControl& control) {
       const std::uint64_t keyframes = tracker.keyframesAccepted();
       const bool by_count = config_.checkpoint_every_keyframes > 0 &&
                             keyframes - keyframes_at_checkpoint >=
-                                static_cast<std::uint64_t>(config_.checkpoint_every_keyframes);
+                                static_cast<std::uint64_t>(config_.checkpoint_every_keyframes) &&
+                            now() - last_checkpoint >= config_.checkpoint_min_seconds;
       const bool by_time = config_.checkpoint_every_seconds > 0 &&
                            now() - last_checkpoint >= config_.checkpoint_every_seconds &&
                            keyframes > keyframes_at_checkpoint;
@@ -308,8 +309,7 @@ int Pipeline::run(RunControl& control) {
 
   // Final save, through the writer so it is ordered after any checkpoint in flight.
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
-  writer.submit(final_map, outputs_.map_path, trajectory_files,
-                meshFile(outputs_, mapper, stats_));
+  writer.submit(final_map, outputs_.map_path, trajectory_files, meshFile(outputs_, mapper, stats_));
   publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;

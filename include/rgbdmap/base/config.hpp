@@ -65,6 +65,7 @@ struct Config {
 
   int checkpoint_every_keyframes = 50;   // checkpoint.every_keyframes (0 = off)
   double checkpoint_every_seconds = 60;  // checkpoint.every_seconds (0 = off)
+  double checkpoint_min_seconds = 10;    // checkpoint.min_seconds
 
   // A key's name, help text and accessors bound to one Config instance.
   struct Key {

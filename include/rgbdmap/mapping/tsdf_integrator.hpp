@@ -1,11 +1,13 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <opencv2/core.hpp>
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
+#include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
 namespace rgbdmap {
@@ -51,8 +53,14 @@ struct TsdfIntegrator {
   // surface per distance along the ray, cos(incidence)). Computed where needed rather than stored
   // per pixel: a per-pixel table was four times the depth image and fusion waited on its cache
   // misses.
-  float bandAt(float depth) const;
-  float weightAt(float depth, float scale) const;
+  float bandAt(float depth) const {
+    return std::max(static_cast<float>(truncation),
+                    static_cast<float>(truncation_sigmas) * kinectDepthSigma(depth));
+  }
+  float weightAt(float depth, float scale) const {
+    const float r = kinectDepthSigma(1.0f) / kinectDepthSigma(depth);
+    return r * r * scale;
+  }
 
  private:
   void prepareIncidence(const cv::Mat& depth, WorkerPool* pool);
