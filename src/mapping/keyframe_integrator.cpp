@@ -57,6 +57,19 @@ KeyframeIntegrator::KeyframeIntegrator(const Config& config, int threads)
     cv::initUndistortRectifyMap(config.camera.cameraMatrix(), config.camera.distortion(),
                                 cv::Matx33d::eye(), config.camera.cameraMatrix(), size, CV_16SC2,
                                 undistort_map1_, undistort_map2_);
+    cv::Mat x, y;
+    cv::initUndistortRectifyMap(config.camera.cameraMatrix(), config.camera.distortion(),
+                                cv::Matx33d::eye(), config.camera.cameraMatrix(), size, CV_32FC1, x,
+                                y);
+    color_pixel_of_.resize(static_cast<std::size_t>(size.area()));
+    for (int v = 0; v < size.height; ++v) {
+      for (int u = 0; u < size.width; ++u) {
+        const int su = cvRound(x.at<float>(v, u)), sv = cvRound(y.at<float>(v, u));
+        const bool inside = su >= 0 && sv >= 0 && su < size.width && sv < size.height;
+        color_pixel_of_[static_cast<std::size_t>(v) * size.width + u] =
+            inside ? sv * size.width + su : -1;
+      }
+    }
   }
 }
 
@@ -69,18 +82,18 @@ void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& 
   const auto project_start = std::chrono::steady_clock::now();
   if (statistical_) removeStatisticalOutliers(frame);
   const cv::Mat* depth = &depth_;
-  const cv::Mat* color = &frame.color;
+  const int* color_pixel_of = nullptr;
+  // Colour is read through the table where fusion needs it (near surfaces), not remapped whole.
   if (undistort_) {
     // Nearest neighbour for depth: interpolating across an edge would invent surfaces.
     cv::remap(depth_, pinhole_depth_, undistort_map1_, undistort_map2_, cv::INTER_NEAREST);
-    cv::remap(frame.color, pinhole_color_, undistort_map1_, undistort_map2_, cv::INTER_LINEAR);
     depth = &pinhole_depth_;
-    color = &pinhole_color_;
+    color_pixel_of = color_pixel_of_.data();
   }
   stats.project_latency.record(secondsSince(project_start));
 
   const auto fuse_start = std::chrono::steady_clock::now();
-  tsdf_.integrate(*depth, *color, frame.pose, map, &pool_);
+  tsdf_.integrate(*depth, frame.color, frame.pose, map, &pool_, color_pixel_of);
   stats.fuse_latency.record(secondsSince(fuse_start));
   stats.integrate_latency.record(secondsSince(start));
 }

@@ -14,6 +14,8 @@ namespace {
 // together.
 constexpr int kCellRowsPerTask = 8;
 constexpr std::size_t kBlocksPerTask = 32;
+constexpr int kAllocationRowsPerTask = 32;
+constexpr std::size_t kScanBlocksPerTask = 4096;
 
 std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) {
   const float mixed = old_value + alpha * (static_cast<float>(new_value) - old_value);
@@ -29,67 +31,104 @@ const cv::Mat& contiguous(const cv::Mat& image, cv::Mat& copy) {
 
 }  // namespace
 
-// Allocates the blocks along each sampled pixel's ray within the band around its depth.
-void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose,
-                              VoxelMap& map) const {
+// Allocates the blocks along each sampled pixel's ray within the band around its depth. The rays
+// are walked on the pool, a band of rows per task, each task listing the blocks it crossed; the
+// lists are then entered in task order, so blocks are created in the same order whatever the
+// thread count.
+void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose, VoxelMap& map,
+                              WorkerPool* pool) {
   const CameraIntrinsics& cam = camera;
   const float block = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
   const float inv_block = 1.0f / block;
   const Eigen::Matrix3f R = pose.linear().cast<float>();
   const Eigen::Vector3f t = pose.translation().cast<float>();
   const int stride = std::max(1, allocation_stride);
-  Eigen::Vector3i last(INT32_MIN, INT32_MIN, INT32_MIN);
-  for (int v = 0; v < depth.rows; v += stride) {
-    const float* row = depth.ptr<float>(v);
-    for (int u = 0; u < depth.cols; u += stride) {
-      const float d = row[u];
-      if (!(d > 0.0f)) continue;
-      const float band = bandAt(d);
-      const Eigen::Vector3f ray =
-          R * Eigen::Vector3f(static_cast<float>((u - cam.cx) / cam.fx),
-                              static_cast<float>((v - cam.cy) / cam.fy), 1.0f);
-      // Steps of at most half a block along the ray, so that no block it crosses is skipped.
-      const int steps = 1 + static_cast<int>(std::ceil(2.0f * band * ray.norm() / (0.5f * block)));
-      for (int i = 0; i <= steps; ++i) {
-        const float s = d - band + 2.0f * band * static_cast<float>(i) / static_cast<float>(steps);
-        const Eigen::Vector3f p = (t + ray * s) * inv_block;
-        const Eigen::Vector3i b(static_cast<int>(std::floor(p.x())),
-                                static_cast<int>(std::floor(p.y())),
-                                static_cast<int>(std::floor(p.z())));
-        if (b == last) continue;
-        last = b;
-        map.touchBlock(b);
+  const int rows_per_task = stride * std::max(1, kAllocationRowsPerTask / stride);
+  const std::size_t tasks =
+      static_cast<std::size_t>((depth.rows + rows_per_task - 1) / rows_per_task);
+  crossed_.resize(std::max(crossed_.size(), tasks));
+  auto walk = [&](std::size_t task) {
+    std::vector<Eigen::Vector3i>& crossed = crossed_[task];
+    crossed.clear();
+    Eigen::Vector3i last(INT32_MIN, INT32_MIN, INT32_MIN);
+    const int first_row = static_cast<int>(task) * rows_per_task;
+    const int last_row = std::min(depth.rows, first_row + rows_per_task);
+    for (int v = first_row; v < last_row; v += stride) {
+      const float* row = depth.ptr<float>(v);
+      for (int u = 0; u < depth.cols; u += stride) {
+        const float d = row[u];
+        if (!(d > 0.0f)) continue;
+        const float band = bandAt(d);
+        const Eigen::Vector3f ray =
+            R * Eigen::Vector3f(static_cast<float>((u - cam.cx) / cam.fx),
+                                static_cast<float>((v - cam.cy) / cam.fy), 1.0f);
+        // Steps of at most half a block along the ray, so that no block it crosses is skipped.
+        const int steps =
+            1 + static_cast<int>(std::ceil(2.0f * band * ray.norm() / (0.5f * block)));
+        for (int i = 0; i <= steps; ++i) {
+          const float s =
+              d - band + 2.0f * band * static_cast<float>(i) / static_cast<float>(steps);
+          const Eigen::Vector3f p = (t + ray * s) * inv_block;
+          const Eigen::Vector3i b(static_cast<int>(std::floor(p.x())),
+                                  static_cast<int>(std::floor(p.y())),
+                                  static_cast<int>(std::floor(p.z())));
+          if (b == last) continue;
+          last = b;
+          crossed.push_back(b);
+        }
       }
     }
-  }
+  };
+  if (pool)
+    pool->run(tasks, walk);
+  else
+    for (std::size_t i = 0; i < tasks; ++i) walk(i);
+  for (std::size_t task = 0; task < tasks; ++task)
+    for (const Eigen::Vector3i& b : crossed_[task]) map.touchBlock(b);
 }
 
 // Adds the blocks already in the map that a view sees through: between the camera and what it
 // measured, beyond its band (in distance to the surface). Allocation only reaches the band around
 // each measurement, so without this an object that went away would never be updated again. Scans
-// the blocks' coordinates (a compact array), not the blocks.
+// the blocks' coordinates (a compact array), not the blocks, in chunks on the pool; the chunks'
+// finds are added in order.
 void TsdfIntegrator::touchSeenThrough(const cv::Mat& depth,
-                                      const Eigen::Isometry3f& world_to_camera,
-                                      VoxelMap& map) const {
+                                      const Eigen::Isometry3f& world_to_camera, VoxelMap& map,
+                                      WorkerPool* pool) {
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   const float edge = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
   const float half_diagonal = 0.5f * std::sqrt(3.0f) * edge;
   const std::vector<Eigen::Vector3i>& coordinates = map.blockCoordinates();
-  for (std::uint32_t i = 0; i < coordinates.size(); ++i) {
-    if (coordinates[i] == VoxelMap::kNoBlock) continue;
-    const Eigen::Vector3f c =
-        world_to_camera * ((coordinates[i].cast<float>() + Eigen::Vector3f::Constant(0.5f)) * edge);
-    if (c.z() <= 0.0f) continue;
-    const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
-    if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(depth.cols) &&
-          v < static_cast<float>(depth.rows)))
-      continue;
-    const int ui = static_cast<int>(u), vi = static_cast<int>(v);
-    const float d = depth.ptr<float>(vi)[ui];
-    if (d > 0.0f && (d - c.z() + half_diagonal) * incidenceAt(ui, vi) >= bandAt(d))
-      map.touchExisting(i);
-  }
+  const std::size_t tasks = (coordinates.size() + kScanBlocksPerTask - 1) / kScanBlocksPerTask;
+  seen_through_.resize(std::max(seen_through_.size(), tasks));
+  auto scan = [&](std::size_t task) {
+    std::vector<std::uint32_t>& found = seen_through_[task];
+    found.clear();
+    const std::size_t first = task * kScanBlocksPerTask;
+    const std::size_t last = std::min(coordinates.size(), first + kScanBlocksPerTask);
+    for (std::size_t i = first; i < last; ++i) {
+      if (coordinates[i] == VoxelMap::kNoBlock) continue;
+      const Eigen::Vector3f c =
+          world_to_camera *
+          ((coordinates[i].cast<float>() + Eigen::Vector3f::Constant(0.5f)) * edge);
+      if (c.z() <= 0.0f) continue;
+      const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
+      if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(depth.cols) &&
+            v < static_cast<float>(depth.rows)))
+        continue;
+      const int ui = static_cast<int>(u), vi = static_cast<int>(v);
+      const float d = depth.ptr<float>(vi)[ui];
+      if (d > 0.0f && (d - c.z() + half_diagonal) * incidenceAt(ui, vi) >= bandAt(d))
+        found.push_back(static_cast<std::uint32_t>(i));
+    }
+  };
+  if (pool)
+    pool->run(tasks, scan);
+  else
+    for (std::size_t i = 0; i < tasks; ++i) scan(i);
+  for (std::size_t task = 0; task < tasks; ++task)
+    for (const std::uint32_t i : seen_through_[task]) map.touchExisting(i);
 }
 
 void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
@@ -179,8 +218,73 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   });
 }
 
+// Compiled for AVX2 as well as for the baseline (the CPU picks at load time): the projection of
+// a row of 8 voxels then takes one instruction per step.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void TsdfIntegrator::fuseBlock(
+    const ImageView& view, VoxelMap::Block& block) const {
+  constexpr int kEdge = VoxelMap::kBlockEdge;
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
+  const float fwidth = static_cast<float>(view.width), fheight = static_cast<float>(view.height);
+  const Eigen::Vector3f origin =
+      view.world_to_camera *
+      ((block.origin.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * view.voxel);
+  for (int z = 0; z < kEdge; ++z) {
+    for (int y = 0; y < kEdge; ++y) {
+      const Eigen::Vector3f start =
+          origin + static_cast<float>(y) * view.dy + static_cast<float>(z) * view.dz;
+      // A row of voxels projected in one go (no branches: the compiler vectorises it), then
+      // each updated from its pixel.
+      float depth_of[kEdge];
+      int u_of[kEdge], v_of[kEdge];
+      for (int x = 0; x < kEdge; ++x) {
+        const float px = start.x() + static_cast<float>(x) * view.dx.x();
+        const float py = start.y() + static_cast<float>(x) * view.dx.y();
+        const float pz = start.z() + static_cast<float>(x) * view.dx.z();
+        const float inv_z = 1.0f / pz;
+        const float u = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
+        const float v = fy * py * inv_z + cy;
+        const bool inside = pz > 0.0f && u >= 0.0f && v >= 0.0f && u < fwidth && v < fheight;
+        depth_of[x] = pz;
+        u_of[x] = inside ? static_cast<int>(u) : -1;
+        v_of[x] = inside ? static_cast<int>(v) : 0;
+      }
+      VoxelMap::Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
+      for (int x = 0; x < kEdge; ++x) {
+        if (u_of[x] < 0) continue;
+        const std::size_t pixel = static_cast<std::size_t>(v_of[x]) * view.width + u_of[x];
+        const float d = view.depth[pixel];
+        if (!(d > 0.0f)) continue;
+        const float scale = incidenceAt(u_of[x], v_of[x]);
+        const float sdf = (d - depth_of[x]) * scale;  // to the surface, not the pixel
+        const float band = bandAt(d);
+        if (sdf < -band) continue;  // hidden behind the surface: nothing known
+        const bool near = sdf < band;
+        // Free space: as sure as a measurement at the voxel's own depth would be (a far
+        // surface seen through a voxel leaves no doubt that it is empty).
+        const float w = weightAt(near ? d : depth_of[x], scale);
+        VoxelMap::Voxel& voxel = row[x];
+        const float total = voxel.weight + w;
+        const float alpha = w / total;
+        voxel.sdf += alpha * (std::min(sdf, band) - voxel.sdf);
+        voxel.weight = total;
+        const int color_pixel =
+            view.color_pixel_of ? view.color_pixel_of[pixel] : static_cast<int>(pixel);
+        if (near && color_pixel >= 0) {  // near the surface: its colour
+          const std::uint8_t* c = view.color + 3 * static_cast<std::size_t>(color_pixel);
+          voxel.r = blend(voxel.r, c[2], alpha);
+          voxel.g = blend(voxel.g, c[1], alpha);
+          voxel.b = blend(voxel.b, c[0], alpha);
+        }
+        if (voxel.observations < 255) ++voxel.observations;
+      }
+    }
+  }
+}
+
 void TsdfIntegrator::integrate(const cv::Mat& depth_in, const cv::Mat& color_in,
-                               const Eigen::Isometry3d& pose, VoxelMap& map, WorkerPool* pool) {
+                               const Eigen::Isometry3d& pose, VoxelMap& map, WorkerPool* pool,
+                               const int* color_pixel_of) {
   CV_Assert(depth_in.type() == CV_32FC1 && color_in.type() == CV_8UC3 &&
             color_in.size() == depth_in.size());
   const cv::Mat& depth = contiguous(depth_in, depth_);
@@ -189,79 +293,26 @@ void TsdfIntegrator::integrate(const cv::Mat& depth_in, const cv::Mat& color_in,
   map.beginIntegration();
   const Eigen::Isometry3f world_to_camera = pose.inverse().cast<float>();
   if (map.integrations() % std::max(1, seen_through_every) == 0)
-    touchSeenThrough(depth, world_to_camera, map);
-  allocate(depth, pose, map);
+    touchSeenThrough(depth, world_to_camera, map, pool);
+  allocate(depth, pose, map, pool);
 
+  ImageView view;
+  view.world_to_camera = world_to_camera;
+  view.voxel = static_cast<float>(map.voxelSize());
   const Eigen::Matrix3f Rcw = world_to_camera.linear();
-  const float voxel = static_cast<float>(map.voxelSize());
-  const Eigen::Vector3f dx = Rcw.col(0) * voxel, dy = Rcw.col(1) * voxel, dz = Rcw.col(2) * voxel;
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
-  const int width = depth.cols;
-  const float fwidth = static_cast<float>(depth.cols), fheight = static_cast<float>(depth.rows);
-  const float* depth_px = depth.ptr<float>();
-  const std::uint8_t* color_px = color_bgr.ptr<std::uint8_t>();
-  constexpr int kEdge = VoxelMap::kBlockEdge;
+  view.dx = Rcw.col(0) * view.voxel;
+  view.dy = Rcw.col(1) * view.voxel;
+  view.dz = Rcw.col(2) * view.voxel;
+  view.depth = depth.ptr<float>();
+  view.color = color_bgr.ptr<std::uint8_t>();
+  view.color_pixel_of = color_pixel_of;
+  view.width = depth.cols;
+  view.height = depth.rows;
   const std::vector<std::uint32_t>& touched = map.touchedBlocks();
-
   auto fuse_blocks = [&](std::size_t task) {
     const std::size_t first = task * kBlocksPerTask;
     const std::size_t last = std::min(touched.size(), first + kBlocksPerTask);
-    for (std::size_t b = first; b < last; ++b) {
-      VoxelMap::Block& block = map.block(touched[b]);
-      const Eigen::Vector3f origin =
-          world_to_camera *
-          ((block.origin.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * voxel);
-      for (int z = 0; z < kEdge; ++z) {
-        for (int y = 0; y < kEdge; ++y) {
-          const Eigen::Vector3f start =
-              origin + static_cast<float>(y) * dy + static_cast<float>(z) * dz;
-          // A row of voxels projected in one go (no branches: the compiler vectorises it), then
-          // each updated from its pixel.
-          float depth_of[kEdge];
-          int u_of[kEdge], v_of[kEdge];
-          for (int x = 0; x < kEdge; ++x) {
-            const float px = start.x() + static_cast<float>(x) * dx.x();
-            const float py = start.y() + static_cast<float>(x) * dx.y();
-            const float pz = start.z() + static_cast<float>(x) * dx.z();
-            const float inv_z = 1.0f / pz;
-            const float u = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
-            const float v = fy * py * inv_z + cy;
-            const bool inside = pz > 0.0f && u >= 0.0f && v >= 0.0f && u < fwidth && v < fheight;
-            depth_of[x] = pz;
-            u_of[x] = inside ? static_cast<int>(u) : -1;
-            v_of[x] = inside ? static_cast<int>(v) : 0;
-          }
-          VoxelMap::Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
-          for (int x = 0; x < kEdge; ++x) {
-            if (u_of[x] < 0) continue;
-            const std::size_t pixel = static_cast<std::size_t>(v_of[x]) * width + u_of[x];
-            const float d = depth_px[pixel];
-            if (!(d > 0.0f)) continue;
-            const float scale = incidenceAt(u_of[x], v_of[x]);
-            const float sdf = (d - depth_of[x]) * scale;  // to the surface, not the pixel
-            const float band = bandAt(d);
-            if (sdf < -band) continue;  // hidden behind the surface: nothing known
-            const bool near = sdf < band;
-            // Free space: as sure as a measurement at the voxel's own depth would be (a far
-            // surface seen through a voxel leaves no doubt that it is empty).
-            const float w = weightAt(near ? d : depth_of[x], scale);
-            VoxelMap::Voxel& voxel_ref = row[x];
-            const float total = voxel_ref.weight + w;
-            const float alpha = w / total;
-            voxel_ref.sdf += alpha * (std::min(sdf, band) - voxel_ref.sdf);
-            voxel_ref.weight = total;
-            if (near) {  // near the surface: its colour
-              const std::uint8_t* c = color_px + 3 * pixel;
-              voxel_ref.r = blend(voxel_ref.r, c[2], alpha);
-              voxel_ref.g = blend(voxel_ref.g, c[1], alpha);
-              voxel_ref.b = blend(voxel_ref.b, c[0], alpha);
-            }
-            if (voxel_ref.observations < 255) ++voxel_ref.observations;
-          }
-        }
-      }
-    }
+    for (std::size_t b = first; b < last; ++b) fuseBlock(view, map.block(touched[b]));
   };
   const std::size_t tasks = (touched.size() + kBlocksPerTask - 1) / kBlocksPerTask;
   if (pool)

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <vector>
+
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/run_stats.hpp"
@@ -33,7 +35,8 @@ class KeyframeIntegrator {
   double sor_stddev_ = 1.0;
   bool undistort_ = false;
   cv::Mat undistort_map1_, undistort_map2_;  // distorted pixel for each pinhole pixel
-  cv::Mat depth_, scratch_, pinhole_depth_, pinhole_color_;
+  std::vector<int> color_pixel_of_;          // distorted colour pixel for each pinhole pixel
+  cv::Mat depth_, scratch_, pinhole_depth_;
   cv::Mat inverse_, valid_, sum_, count_, low_, high_;  // smoother buffers
   BackProjector projector_;                             // for the statistical filter
   PointBatch batch_;

@@ -45,8 +45,11 @@ struct TsdfIntegrator {
   // depth: CV_32FC1 metres (0 = none), colour: CV_8UC3 BGR of the same size, pose camera-to-world.
   // With a pool the voxels are updated on all its threads (each block by one thread: the map
   // is the same whatever the thread count). Buffers are kept between calls.
+  // color_pixel_of: for each depth pixel, the colour pixel that saw the same ray, -1 for none
+  // (lens distortion undone by lookup: only voxels near a surface read colour, so remapping the
+  // whole colour image would be wasted); nullptr: the same pixel.
   void integrate(const cv::Mat& depth, const cv::Mat& color_bgr, const Eigen::Isometry3d& pose,
-                 VoxelMap& map, WorkerPool* pool = nullptr);
+                 VoxelMap& map, WorkerPool* pool = nullptr, const int* color_pixel_of = nullptr);
 
   // What fusion makes of a measured depth: the band it updates (+-band around it) and its
   // weight, scale / sigma^2 relative to a head-on measurement at 1 m (scale: the distance to the
@@ -63,18 +66,32 @@ struct TsdfIntegrator {
   }
 
  private:
+  // What updating a block needs of one image.
+  struct ImageView {
+    Eigen::Isometry3f world_to_camera;
+    Eigen::Vector3f dx, dy, dz;  // one voxel along the world axes, in the camera frame
+    float voxel = 0.0f;
+    const float* depth = nullptr;         // contiguous, metres
+    const std::uint8_t* color = nullptr;  // contiguous BGR
+    const int* color_pixel_of = nullptr;  // see integrate()
+    int width = 0, height = 0;
+  };
+  void fuseBlock(const ImageView& view, VoxelMap::Block& block) const;
   void prepareIncidence(const cv::Mat& depth, WorkerPool* pool);
   // cos(incidence) of pixel (u, v), clamped at min_incidence_cosine.
   float incidenceAt(int u, int v) const { return cosine_[cell_row_[v] + cell_column_[u]]; }
-  void allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose, VoxelMap& map) const;
+  void allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose, VoxelMap& map,
+                WorkerPool* pool);
   void touchSeenThrough(const cv::Mat& depth, const Eigen::Isometry3f& world_to_camera,
-                        VoxelMap& map) const;
+                        VoxelMap& map, WorkerPool* pool);
 
   cv::Mat depth_, color_;                    // continuous copies, made only when the input is not
   std::vector<float> cell_depth_, cosine_;   // incidence grid, row-major: depth sum, then cosine
   std::vector<int> cell_count_;              // pixels with depth in each cell
   std::vector<int> cell_row_, cell_column_;  // pixel row / column -> its cell's offset in the grid
   int grid_width_ = 0, grid_height_ = 0;
+  std::vector<std::vector<Eigen::Vector3i>> crossed_;  // blocks each allocation task's rays cross
+  std::vector<std::vector<std::uint32_t>> seen_through_;  // blocks each scan task found
 };
 
 }  // namespace rgbdmap
