@@ -49,10 +49,9 @@ VoxelMap fieldMap(const std::function<float(const Eigen::Vector3f&)>& sdf,
               block.origin + Eigen::Vector3i(i % kEdge, (i / kEdge) % kEdge, i / (kEdge * kEdge));
           const Eigen::Vector3f p = (v.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * kVoxel;
           VoxelMap::Voxel& voxel = block.voxels[i];
-          voxel.sdf = std::clamp(sdf(p), -kBand, kBand);
-          voxel.weight = 1.0f;
+          voxel.set(std::clamp(sdf(p), -kBand, kBand), 1.0f);
           voxel.observations = observations;
-          voxel.r = voxel.sdf < 0.0f ? 255 : 0;
+          voxel.r = voxel.sdf() < 0.0f ? 255 : 0;
           voxel.g = 100;
           voxel.b = 7;
         }
@@ -136,7 +135,7 @@ TEST(MeshExtractor, OnlyObservedVoxelsAreMeshed) {
   for (std::uint32_t b = 0; b < map.blockCount(); ++b)
     for (int i = 0; i < VoxelMap::kBlockVoxels; ++i)
       if (map.block(b).origin.x() + i % VoxelMap::kBlockEdge >= 0)
-        map.block(b).voxels[i].weight = 0.0f;
+        map.block(b).voxels[i] = VoxelMap::Voxel{};
   const TriangleMesh half = extractMesh(map);
   ASSERT_GT(half.triangles.size(), 100u);
   for (const Eigen::Vector3f& v : half.vertices) ASSERT_LT(v.x(), -0.005f + 1e-6f);

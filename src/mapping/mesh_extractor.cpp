@@ -56,8 +56,8 @@ void gather(const VoxelMap& map, const KeyIndex& index, std::uint32_t block_inde
         }
         const int local = ((z & 7) * kEdge + (y & 7)) * kEdge + (x & 7);
         const VoxelMap::Voxel& v = map.block(b).voxels[local];
-        n.sdf[at] = v.sdf;
-        n.usable[at] = v.weight > 0.0f && v.observations >= min_observations;
+        n.sdf[at] = v.sdf();
+        n.usable[at] = v.observed() && v.observations >= min_observations;
         n.voxel[at] = &v;
         n.id[at] = static_cast<std::uint64_t>(b) * VoxelMap::kBlockVoxels + local;
       }
@@ -86,7 +86,7 @@ TriangleMesh extractMesh(const VoxelMap& map, const MeshOptions& options) {
   for (std::uint32_t b = 0; b < slots; ++b)
     if (map.block(b).in_use)
       for (const VoxelMap::Voxel& v : map.block(b).voxels)
-        if (v.weight > 0.0f && std::abs(v.sdf) < max_near) {
+        if (v.observed() && std::abs(v.sdf()) < max_near) {
           near[b] = true;
           break;
         }

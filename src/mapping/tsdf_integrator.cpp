@@ -264,10 +264,10 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void TsdfIntegrator:
         // surface seen through a voxel leaves no doubt that it is empty).
         const float w = weightAt(near ? d : depth_of[x], scale);
         VoxelMap::Voxel& voxel = row[x];
-        const float total = voxel.weight + w;
-        const float alpha = w / total;
-        voxel.sdf += alpha * (std::min(sdf, band) - voxel.sdf);
-        voxel.weight = total;
+        const float old_weight = voxel.weight(), old_sdf = voxel.sdf();
+        const float alpha = w / (old_weight + w);
+        voxel.set(old_sdf + alpha * (std::min(sdf, band) - old_sdf),
+                  std::min(old_weight + w, VoxelMap::Voxel::kMaxWeight));
         const int color_pixel =
             view.color_pixel_of ? view.color_pixel_of[pixel] : static_cast<int>(pixel);
         if (near && color_pixel >= 0) {  // near the surface: its colour

@@ -105,7 +105,7 @@ std::size_t VoxelMap::pruneFreeSpace(std::uint64_t idle, float clearance) {
     Block& b = blocks_[i];
     if (!b.in_use || b.touched_in + idle >= integration_) continue;
     const bool free_space = std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
-      return v.weight <= 0.0f || v.sdf >= clearance;
+      return !v.observed() || v.sdf() >= clearance;
     });
     if (!free_space) continue;
     std::uint64_t key;
@@ -150,7 +150,7 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
       at[axis] &= kEdge - 1;
     }
     const Voxel& v = in->voxels[(at[2] * kEdge + at[1]) * kEdge + at[0]];
-    return v.weight > 0.0f ? &v : nullptr;
+    return v.observed() ? &v : nullptr;
   };
   for (int z = 0; z < kEdge; ++z) {
     for (int y = 0; y < kEdge; ++y) {
@@ -158,9 +158,9 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
         const Voxel& v = block.voxels[(z * kEdge + y) * kEdge + x];
         // The nearer voxel of a crossing is within about half a voxel of the surface (a little
         // more along an oblique line of sight); farther ones cannot be the nearer of a pair.
-        if (v.weight <= 0.0f || v.observations < min_observations_ || std::abs(v.sdf) >= voxel)
+        if (!v.observed() || v.observations < min_observations_ || std::abs(v.sdf()) >= voxel)
           continue;
-        const bool front = v.sdf >= 0.0f;
+        const bool front = v.sdf() >= 0.0f;
         bool surface = false;
         const Voxel* lower[3];
         const Voxel* upper[3];
@@ -168,8 +168,8 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
           lower[axis] = neighbour(x, y, z, axis, 0);
           upper[axis] = neighbour(x, y, z, axis, 1);
           for (const Voxel* n : {lower[axis], upper[axis]}) {
-            if (n == nullptr || (n->sdf >= 0.0f) == front) continue;
-            const float own = std::abs(v.sdf), other = std::abs(n->sdf);
+            if (n == nullptr || (n->sdf() >= 0.0f) == front) continue;
+            const float own = std::abs(v.sdf()), other = std::abs(n->sdf());
             if (own < other || (own == other && front)) surface = true;
           }
         }
@@ -177,11 +177,11 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
         Eigen::Vector3f gradient;
         for (int axis = 0; axis < 3; ++axis) {
           if (lower[axis] && upper[axis])
-            gradient[axis] = (upper[axis]->sdf - lower[axis]->sdf) / (2.0f * voxel);
+            gradient[axis] = (upper[axis]->sdf() - lower[axis]->sdf()) / (2.0f * voxel);
           else if (upper[axis])
-            gradient[axis] = (upper[axis]->sdf - v.sdf) / voxel;
+            gradient[axis] = (upper[axis]->sdf() - v.sdf()) / voxel;
           else if (lower[axis])
-            gradient[axis] = (v.sdf - lower[axis]->sdf) / voxel;
+            gradient[axis] = (v.sdf() - lower[axis]->sdf()) / voxel;
           else
             gradient[axis] = 0.0f;
         }
@@ -190,7 +190,7 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
         // Onto the zero level of the locally linear field, at most a voxel away.
         const float g2 = gradient.squaredNorm();
         if (g2 > 1e-6f) {
-          Eigen::Vector3f step = -v.sdf * gradient / g2;
+          Eigen::Vector3f step = -v.sdf() * gradient / g2;
           const float length = step.norm();
           if (length > voxel) step *= voxel / length;
           p += step;
@@ -258,7 +258,7 @@ void VoxelMap::extract(std::vector<SurfacePoint>& points) const {
   for (const Block& b : blocks_) {
     if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
-      points.push_back({p, v.weight, v.r, v.g, v.b});
+      points.push_back({p, v.weight(), v.r, v.g, v.b});
     });
   }
 }

@@ -5,6 +5,7 @@
 #include <tsl/hopscotch_map.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <deque>
@@ -36,12 +37,33 @@ struct VoxelKeyHash {
 // whose |distance| is the smaller of the pair, moved onto the zero level along the gradient.
 class VoxelMap {
  public:
+  // 8 bytes: blocks are most of a long run's memory. The distance is kept in steps of 4 um
+  // (+-13 cm, wider than any band up to 5 m), the weight in steps of 1/2048 of a head-on
+  // measurement at 1 m, saturating at 32 of them: from there on each measurement moves the
+  // voxel by a fixed share (an average over the latest few dozen close views, which still lets a
+  // moved object go), and the 16-bit distance never stops taking it in.
   struct Voxel {
-    float sdf = 0.0f;     // metres, truncated
-    float weight = 0.0f;  // sum of measurement weights; 0 = never observed
+    static constexpr float kSdfStep = 4e-6f;  // m
+    static constexpr float kWeightStep = 1.0f / 2048;
+    static constexpr float kMaxWeight = 65535 * kWeightStep;
+
+    float sdf() const { return static_cast<float>(sdf_steps) * kSdfStep; }  // metres, truncated
+    float weight() const { return static_cast<float>(weight_steps) * kWeightStep; }
+    bool observed() const { return weight_steps > 0; }
+    // Stores both, rounded; an observed voxel keeps a weight above 0.
+    void set(float sdf, float weight) {
+      const float s = std::clamp(sdf / kSdfStep, -32767.0f, 32767.0f);
+      sdf_steps = static_cast<std::int16_t>(s >= 0.0f ? s + 0.5f : s - 0.5f);
+      const float w = std::clamp(weight / kWeightStep + 0.5f, 1.0f, 65535.0f);
+      weight_steps = static_cast<std::uint16_t>(w);
+    }
+
+    std::int16_t sdf_steps = 0;
+    std::uint16_t weight_steps = 0;  // sum of measurement weights; 0 = never observed
     std::uint8_t r = 0, g = 0, b = 0;
     std::uint8_t observations = 0;  // frames fused into this voxel, saturating at 255
   };
+  static_assert(sizeof(Voxel) == 8, "voxels are 8 bytes");
   static constexpr int kBlockBits = 3;
   static constexpr int kBlockEdge = 1 << kBlockBits;  // voxels per block edge
   static constexpr int kBlockVoxels = kBlockEdge * kBlockEdge * kBlockEdge;
