@@ -52,10 +52,11 @@ class VoxelMap {
     bool observed() const { return weight_steps > 0; }
     // Stores both, rounded; an observed voxel keeps a weight above 0.
     void set(float sdf, float weight) {
-      const float s = std::clamp(sdf / kSdfStep, -32767.0f, 32767.0f);
-      sdf_steps = static_cast<std::int16_t>(s >= 0.0f ? s + 0.5f : s - 0.5f);
-      const float w = std::clamp(weight / kWeightStep + 0.5f, 1.0f, 65535.0f);
-      weight_steps = static_cast<std::uint16_t>(w);
+      // Rounded by adding 0.5 to a value made positive first: no branch, no call.
+      const float s = std::min(std::max(sdf * (1.0f / kSdfStep), -32767.0f), 32767.0f);
+      sdf_steps = static_cast<std::int16_t>(static_cast<int>(s + 32768.5f) - 32768);
+      const float w = std::min(std::max(weight * (1.0f / kWeightStep) + 0.5f, 1.0f), 65535.0f);
+      weight_steps = static_cast<std::uint16_t>(static_cast<int>(w));
     }
 
     std::int16_t sdf_steps = 0;
