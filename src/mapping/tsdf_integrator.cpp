@@ -17,9 +17,9 @@ constexpr std::size_t kBlocksPerTask = 32;
 constexpr int kAllocationRowsPerTask = 32;
 constexpr std::size_t kScanBlocksPerTask = 4096;
 
-std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, float alpha) {
-  const float mixed = old_value + alpha * (static_cast<float>(new_value) - old_value);
-  return static_cast<std::uint8_t>(std::clamp(mixed + 0.5f, 0.0f, 255.0f));
+// old + share / 256 of (new - old), rounded; share in [0, 256].
+std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, int share) {
+  return static_cast<std::uint8_t>((old_value * (256 - share) + new_value * share + 128) >> 8);
 }
 
 // The image itself when its rows are contiguous, else a contiguous copy kept in `copy`.
@@ -272,9 +272,10 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void TsdfIntegrator:
             view.color_pixel_of ? view.color_pixel_of[pixel] : static_cast<int>(pixel);
         if (near && color_pixel >= 0) {  // near the surface: its colour
           const std::uint8_t* c = view.color + 3 * static_cast<std::size_t>(color_pixel);
-          voxel.r = blend(voxel.r, c[2], alpha);
-          voxel.g = blend(voxel.g, c[1], alpha);
-          voxel.b = blend(voxel.b, c[0], alpha);
+          const int share = static_cast<int>(alpha * 256.0f + 0.5f);
+          voxel.r = blend(voxel.r, c[2], share);
+          voxel.g = blend(voxel.g, c[1], share);
+          voxel.b = blend(voxel.b, c[0], share);
         }
         if (voxel.observations < 255) ++voxel.observations;
       }
