@@ -4,6 +4,8 @@
 #   tum    TUM fr1/rpy (100 real frames): original every 10th vs rgbdmap every 10th / every frame
 #   synth  a synthetic room with exact geometry (`rgbdmap synth`): the same three, plus F-score
 #          at 1 cm and mean distance from `rgbdmap evaluate map`
+#   tum-long  the same real frames played back and forth to 723 frames (the length of the whole
+#          fr1/rpy; bench/long_real.sh): speed and memory on a long real replay
 #   long   a longer synthetic replay (~700 frames), mainly for peak memory
 # and a tracking table (ground truth used only to score): fr1/xyz, fr1/rpy, the synthetic room
 # and a synthetic walk twice round an 8 x 6 m room with drifting brightness,
@@ -30,6 +32,7 @@ usage: bash bench/run.sh [options]
   --work DIR        where sequences, maps and JSON go (default: a new folder under $TMPDIR)
   --synth-frames N  frames of the synthetic sequence (default: 300; a 6 x 5 x 3 m room)
   --long-frames N   frames of the long synthetic replay (default: 700; 0 skips it)
+  --long-real-frames N  frames of the real frames played back and forth (default: 723; 0 skips)
   --every N         keyframe interval of the original method and of "rgbdmap every Nth" (default 10)
   --micro           also run the Google Benchmark microbenchmarks and append their output
   --keep            keep the work folder (default: kept only when --work is given)
@@ -48,6 +51,7 @@ synth_frames=300
 # A room whose far walls are beyond filter.max_depth (4 m), where the depth noise is 2-3 voxels.
 synth_room="--room 6x5x3"
 long_frames=700
+long_real_frames=723
 every_n=10
 run_micro=0
 keep=0
@@ -64,6 +68,7 @@ while [ $# -gt 0 ]; do
     --work) work_dir="$2"; keep=1; shift 2 ;;
     --synth-frames) synth_frames="$2"; shift 2 ;;
     --long-frames) long_frames="$2"; shift 2 ;;
+    --long-real-frames) long_real_frames="$2"; shift 2 ;;
     --every) every_n="$2"; shift 2 ;;
     --micro) run_micro=1; shift ;;
     --keep) keep=1; shift ;;
@@ -75,7 +80,7 @@ while [ $# -gt 0 ]; do
     *) echo "run.sh: unknown option $1" >&2; usage >&2; exit 2 ;;
   esac
 done
-for n in "$synth_frames" "$long_frames" "$walk_frames" "$every_n" ${frames_limit:+"$frames_limit"}; do
+for n in "$synth_frames" "$long_frames" "$long_real_frames" "$walk_frames" "$every_n" ${frames_limit:+"$frames_limit"}; do
   case "$n" in ''|*[!0-9]*) echo "run.sh: '$n' is not a whole number" >&2; exit 2 ;; esac
 done
 
@@ -309,6 +314,18 @@ if [ -n "$frames_limit" ]; then
   cut_tum "$tum_source" "$tum_seq" "$frames_limit" || { echo "run.sh: cannot cut $tum_source" >&2; exit 1; }
 fi
 run_scenario tum "$tum_seq" ""
+
+# --- (a2) the same real frames back and forth, as long as the whole fr1/rpy (bench/long_real.sh)
+if [ "$long_real_frames" -gt 0 ] && [ "$run_mapping" = 1 ]; then
+  n="$long_real_frames"
+  [ -n "$frames_limit" ] && [ "$frames_limit" -lt "$n" ] && n="$frames_limit"
+  long_real="$work_dir/rgbd_dataset_freiburg1_rpy_long"  # the name keeps the fr1 preset
+  if bash "$root/bench/long_real.sh" "$tum_source" "$long_real" "$n" >/dev/null; then
+    run_scenario tum-long "$long_real" ""
+  else
+    note "tum-long: bench/long_real.sh failed"
+  fi
+fi
 
 # --- (b), (c) synthetic sequences with exact geometry -----------------------------------------
 have_synth=0

@@ -54,14 +54,8 @@ struct RgbToBgr {
     out[3 * x + 2] = p[0];
   }
 };
-struct RgbaToBgr {  // png_set_strip_alpha: no compositing, the alpha byte is simply dropped
-  using Out = std::uint8_t;
+struct RgbaToBgr : RgbToBgr {  // png_set_strip_alpha: no compositing, the alpha byte is dropped
   static constexpr int kBytes = 4;
-  static void put(const std::uint8_t* p, Out* out, std::size_t x) {
-    out[3 * x] = p[2];
-    out[3 * x + 1] = p[1];
-    out[3 * x + 2] = p[0];
-  }
 };
 struct GreyToBgr {  // png_set_gray_to_rgb
   using Out = std::uint8_t;
