@@ -218,10 +218,19 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   });
 }
 
-// Compiled for AVX2 as well as for the baseline (the CPU picks at load time): the projection of
-// a row of 8 voxels then takes one instruction per step.
-__attribute__((target_clones("arch=x86-64-v3", "default"))) void TsdfIntegrator::fuseBlock(
-    const ImageView& view, VoxelMap::Block& block) const {
+// Compiled for x86-64-v3 (AVX2, FMA) as well as for the baseline, the CPU picking at load time:
+// the projection of a row of 8 voxels then takes one instruction per step. Not in sanitizer
+// builds: the clones' resolver runs while the program is being loaded, before the sanitizer's
+// runtime is ready (ThreadSanitizer crashes there).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_THREAD__) && \
+    !defined(__SANITIZE_ADDRESS__)
+#define RGBDMAP_VOXEL_LOOP_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define RGBDMAP_VOXEL_LOOP_CLONES
+#endif
+
+RGBDMAP_VOXEL_LOOP_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
+                                                         VoxelMap::Block& block) const {
   constexpr int kEdge = VoxelMap::kBlockEdge;
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
