@@ -79,10 +79,7 @@ void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pos
       }
     }
   };
-  if (pool)
-    pool->run(tasks, walk);
-  else
-    for (std::size_t i = 0; i < tasks; ++i) walk(i);
+  runTasks(pool, tasks, walk);
   for (std::size_t task = 0; task < tasks; ++task)
     for (const Eigen::Vector3i& b : crossed_[task]) map.touchBlock(b);
 }
@@ -123,10 +120,7 @@ void TsdfIntegrator::touchSeenThrough(const cv::Mat& depth,
         found.push_back(static_cast<std::uint32_t>(i));
     }
   };
-  if (pool)
-    pool->run(tasks, scan);
-  else
-    for (std::size_t i = 0; i < tasks; ++i) scan(i);
+  runTasks(pool, tasks, scan);
   for (std::size_t task = 0; task < tasks; ++task)
     for (const std::uint32_t i : seen_through_[task]) map.touchExisting(i);
 }
@@ -153,12 +147,7 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
 
   const std::size_t tasks =
       static_cast<std::size_t>((grid_height_ + kCellRowsPerTask - 1) / kCellRowsPerTask);
-  auto run = [&](auto&& task) {
-    if (pool)
-      pool->run(tasks, task);
-    else
-      for (std::size_t i = 0; i < tasks; ++i) task(i);
-  };
+  auto run = [&](auto&& task) { runTasks(pool, tasks, task); };
   // Mean depth of each cell (sum and count of the pixels with depth).
   run([&](std::size_t task) {
     const int first = static_cast<int>(task) * kCellRowsPerTask;
@@ -325,10 +314,7 @@ void TsdfIntegrator::integrate(const cv::Mat& depth_in, const cv::Mat& color_in,
     for (std::size_t b = first; b < last; ++b) fuseBlock(view, map.block(touched[b]));
   };
   const std::size_t tasks = (touched.size() + kBlocksPerTask - 1) / kBlocksPerTask;
-  if (pool)
-    pool->run(tasks, fuse_blocks);
-  else
-    for (std::size_t i = 0; i < tasks; ++i) fuse_blocks(i);
+  runTasks(pool, tasks, fuse_blocks);
   map.finishIntegration();
 }
 

@@ -56,4 +56,14 @@ class WorkerPool {
   std::exception_ptr error_;
 };
 
+// Calls body(i) for every i in [0, count): on the pool when there is one, else in turn on the
+// calling thread.
+template <typename Body>
+void runTasks(WorkerPool* pool, std::size_t count, Body&& body) {
+  if (pool)
+    pool->run(count, body);
+  else
+    for (std::size_t i = 0; i < count; ++i) body(i);
+}
+
 }  // namespace rgbdmap
