@@ -15,8 +15,8 @@
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
-#include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/base/png_decoder.hpp"
+#include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
@@ -51,9 +51,10 @@ struct Fixture {
     load(kFrameIndex, frame);
 
     filtered_depth = frame.depth.clone();
-    cv::Mat scratch, inverse, valid, sum, count, low, high;
+    cv::Mat scratch;
     filter().apply(filtered_depth, scratch);
-    smoother().apply(filtered_depth, inverse, valid, sum, count, low, high);
+    rgbdmap::DepthSmoother::Buffers buffers;
+    smoother().apply(filtered_depth, buffers);
     projector().project(filtered_depth, frame.color, frame.pose, points);
 
     scene = std::make_unique<rgbdmap::VoxelMap>(config.voxel_size);
@@ -169,10 +170,11 @@ BENCHMARK(BM_DepthFilter)->Unit(benchmark::kMillisecond);
 void BM_DepthSmoother(benchmark::State& state) {
   Fixture& f = fixture();
   const rgbdmap::DepthSmoother smoother = f.smoother();
-  cv::Mat depth, inverse, valid, sum, count, low, high;
+  cv::Mat depth;
+  rgbdmap::DepthSmoother::Buffers buffers;
   for (auto _ : state) {
     f.filtered_depth.copyTo(depth);
-    smoother.apply(depth, inverse, valid, sum, count, low, high);
+    smoother.apply(depth, buffers);
     benchmark::DoNotOptimize(depth.data);
   }
 }

@@ -70,8 +70,8 @@ TEST(DepthSmoother, ExactOnPlanesAndReducesNoise) {
   const cv::Mat exact = planeDepth(n, -2.0);
   cv::Mat smoothed = exact.clone();
   DepthSmoother s;
-  cv::Mat a, b, c, d, e, f;
-  s.apply(smoothed, a, b, c, d, e, f);
+  DepthSmoother::Buffers buffers;
+  s.apply(smoothed, buffers);
   // Away from the border the window is full and symmetric: no bias on a plane.
   for (int v = 2; v < exact.rows - 2; ++v)
     for (int u = 2; u < exact.cols - 2; ++u)
@@ -85,7 +85,7 @@ TEST(DepthSmoother, ExactOnPlanesAndReducesNoise) {
       noisy.at<float>(v, u) += noise(rng);
     }
   cv::Mat denoised = noisy.clone();
-  s.apply(denoised, a, b, c, d, e, f);
+  s.apply(denoised, buffers);
   double before = 0, after = 0;
   int count = 0;
   for (int v = 2; v < exact.rows - 2; ++v)
@@ -101,8 +101,8 @@ TEST(DepthSmoother, DoesNotBlendAcrossEdges) {
   cv::Mat depth(10, 20, CV_32FC1, cv::Scalar(1.0f));
   depth(cv::Rect(10, 0, 10, 10)).setTo(2.0f);
   DepthSmoother s;
-  cv::Mat a, b, c, d, e, f;
-  s.apply(depth, a, b, c, d, e, f);
+  DepthSmoother::Buffers buffers;
+  s.apply(depth, buffers);
   for (int v = 0; v < 10; ++v)
     for (int u = 0; u < 20; ++u) EXPECT_EQ(depth.at<float>(v, u), u < 10 ? 1.0f : 2.0f);
 }

@@ -22,8 +22,8 @@ TEST(FusionFilters, SmoothingNextToHolesStaysFinite) {
   // Missing pixels must count as nothing (1/0 is inf in OpenCV's float division).
   cv::Mat depth = wallWithHole();
   DepthSmoother s;
-  cv::Mat a, b, c, d, e, f;
-  s.apply(depth, a, b, c, d, e, f);
+  DepthSmoother::Buffers buffers;
+  s.apply(depth, buffers);
   for (int v = 0; v < depth.rows; ++v)
     for (int u = 0; u < depth.cols; ++u) {
       const float z = depth.at<float>(v, u);
@@ -38,10 +38,10 @@ TEST(FusionFilters, SmoothingNextToHolesStaysFinite) {
 TEST(FusionFilters, DropUnsmoothedClearsOnlyPixelsWithoutAFullEnoughWindow) {
   cv::Mat kept = wallWithHole(), dropped = wallWithHole();
   DepthSmoother s;
-  cv::Mat a, b, c, d, e, f;
-  s.apply(kept, a, b, c, d, e, f);
+  DepthSmoother::Buffers buffers;
+  s.apply(kept, buffers);
   s.drop_unsmoothed = true;
-  s.apply(dropped, a, b, c, d, e, f);
+  s.apply(dropped, buffers);
   // Far from the hole and the border: smoothed in both.
   EXPECT_NEAR(dropped.at<float>(5, 5), 2.0f, 1e-5f);
   // The image corner has a quarter window (9 of 25 pixels): kept as measured, or dropped.
@@ -50,7 +50,7 @@ TEST(FusionFilters, DropUnsmoothedClearsOnlyPixelsWithoutAFullEnoughWindow) {
   // A step edge: both sides are dropped within the window radius of it.
   cv::Mat step(10, 20, CV_32FC1, cv::Scalar(1.0f));
   step(cv::Rect(10, 0, 10, 10)).setTo(2.0f);
-  s.apply(step, a, b, c, d, e, f);
+  s.apply(step, buffers);
   EXPECT_EQ(step.at<float>(5, 9), 0.0f);
   EXPECT_EQ(step.at<float>(5, 10), 0.0f);
   EXPECT_EQ(step.at<float>(5, 5), 1.0f);

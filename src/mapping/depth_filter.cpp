@@ -2,9 +2,12 @@
 
 #include <cmath>
 
+#include "rgbdmap/base/vector_clones.hpp"
+
 namespace rgbdmap {
 
-void DepthFilter::apply(const cv::Mat& input, cv::Mat& output, cv::Mat& scratch) const {
+RGBDMAP_VECTOR_CLONES void DepthFilter::apply(const cv::Mat& input, cv::Mat& output,
+                                              cv::Mat& scratch) const {
   CV_Assert(input.type() == CV_32FC1);
   const int rows = input.rows, cols = input.cols;
   const float lo = static_cast<float>(min_depth), hi = static_cast<float>(max_depth);

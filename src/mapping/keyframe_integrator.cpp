@@ -76,7 +76,7 @@ KeyframeIntegrator::KeyframeIntegrator(const Config& config, int threads)
 void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {
   const auto start = std::chrono::steady_clock::now();
   filter_.apply(frame.depth, depth_, scratch_);  // the frame stays untouched
-  smoother_.apply(depth_, inverse_, valid_, sum_, count_, low_, high_);
+  smoother_.apply(depth_, smoothing_);
   stats.filter_latency.record(secondsSince(start));
 
   const auto project_start = std::chrono::steady_clock::now();

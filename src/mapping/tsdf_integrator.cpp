@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdmap/base/vector_clones.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 
 namespace rgbdmap {
@@ -16,6 +17,14 @@ constexpr int kCellRowsPerTask = 8;
 constexpr std::size_t kBlocksPerTask = 32;
 constexpr int kAllocationRowsPerTask = 32;
 constexpr std::size_t kScanBlocksPerTask = 4096;
+
+// Whether any lane of a vector comparison's result is set.
+template <typename Mask>
+inline bool anyOf(const Mask& mask) {
+  bool any = false;
+  for (int i = 0; i < static_cast<int>(sizeof(mask) / sizeof(mask[0])); ++i) any |= mask[i] != 0;
+  return any;
+}
 
 // old + share / 256 of (new - old), rounded; share in [0, 256].
 std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, int share) {
@@ -207,23 +216,25 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   });
 }
 
-// Compiled for x86-64-v3 (AVX2, FMA) as well as for the baseline, the CPU picking at load time:
-// the projection of a row of 8 voxels then takes one instruction per step. Not in sanitizer
-// builds: the clones' resolver runs while the program is being loaded, before the sanitizer's
-// runtime is ready (ThreadSanitizer crashes there).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_THREAD__) && \
-    !defined(__SANITIZE_ADDRESS__)
-#define RGBDMAP_VOXEL_LOOP_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define RGBDMAP_VOXEL_LOOP_CLONES
-#endif
-
-RGBDMAP_VOXEL_LOOP_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
-                                                         VoxelMap::Block& block) const {
+// Compiled for AVX2 too: the projection of a row of 8 voxels then takes one instruction per step.
+RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
+                                                     VoxelMap::Block& block) const {
+  // A row of 8 voxels is updated as one vector (GCC's vector extension: AVX in the x86-64-v3
+  // clone, pairs of SSE registers in the other); only the pixels are fetched one by one. The
+  // arithmetic is the scalar update's: see bandAt(), weightAt() and Voxel::set().
   constexpr int kEdge = VoxelMap::kBlockEdge;
+  using Floats = float __attribute__((vector_size(4 * kEdge)));
+  using Ints = std::int32_t __attribute__((vector_size(4 * kEdge)));
+  const Floats steps = {0, 1, 2, 3, 4, 5, 6, 7};
+  static_assert(kEdge == 8, "a row of voxels is one vector of 8");
+  using Voxel = VoxelMap::Voxel;
+
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   const float fwidth = static_cast<float>(view.width), fheight = static_cast<float>(view.height);
+  const float narrowest = static_cast<float>(truncation);
+  const float sigmas = static_cast<float>(truncation_sigmas);
+  const float sigma_at_1m = kinectDepthSigma(1.0f);
   const Eigen::Vector3f origin =
       view.world_to_camera *
       ((block.origin.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * view.voxel);
@@ -231,49 +242,77 @@ RGBDMAP_VOXEL_LOOP_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
     for (int y = 0; y < kEdge; ++y) {
       const Eigen::Vector3f start =
           origin + static_cast<float>(y) * view.dy + static_cast<float>(z) * view.dz;
-      // A row of voxels projected in one go (no branches: the compiler vectorises it), then
-      // each updated from its pixel.
-      float depth_of[kEdge];
-      int u_of[kEdge], v_of[kEdge];
+      const Floats px = start.x() + steps * view.dx.x();
+      const Floats py = start.y() + steps * view.dx.y();
+      const Floats pz = start.z() + steps * view.dx.z();
+      const Floats inv_z = 1.0f / pz;
+      const Floats uf = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
+      const Floats vf = fy * py * inv_z + cy;
+      // Behind the camera u and v are anything (NaN included): selected away before converting.
+      const Ints inside =
+          (pz > 0.0f) & (uf >= 0.0f) & (vf >= 0.0f) & (uf < fwidth) & (vf < fheight);
+      if (!anyOf(inside)) continue;
+      const Ints u = __builtin_convertvector(inside ? uf : 0.0f, Ints);
+      const Ints v = __builtin_convertvector(inside ? vf : 0.0f, Ints);
+      const Ints pixel = v * view.width + u;
+      Floats d, scale;
       for (int x = 0; x < kEdge; ++x) {
-        const float px = start.x() + static_cast<float>(x) * view.dx.x();
-        const float py = start.y() + static_cast<float>(x) * view.dx.y();
-        const float pz = start.z() + static_cast<float>(x) * view.dx.z();
-        const float inv_z = 1.0f / pz;
-        const float u = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
-        const float v = fy * py * inv_z + cy;
-        const bool inside = pz > 0.0f && u >= 0.0f && v >= 0.0f && u < fwidth && v < fheight;
-        depth_of[x] = pz;
-        u_of[x] = inside ? static_cast<int>(u) : -1;
-        v_of[x] = inside ? static_cast<int>(v) : 0;
+        d[x] = view.depth[pixel[x]];
+        scale[x] = incidenceAt(u[x], v[x]);
       }
-      VoxelMap::Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
+      const Floats sdf = (d - pz) * scale;  // to the surface, not the pixel
+      const Floats band_sigma = d - 0.4f;   // kinectDepthSigma(d), and the band from it
+      const Floats sigma = 0.0012f + 0.0019f * band_sigma * band_sigma;
+      const Floats wide = sigmas * sigma;
+      const Floats band = wide > narrowest ? wide : narrowest;
+      // Behind the surface by more than the band: nothing known.
+      const Ints update = inside & (d > 0.0f) & (sdf >= -band);
+      if (!anyOf(update)) continue;
+      const Ints near = sdf < band;
+      // Free space: as sure as a measurement at the voxel's own depth would be (a far surface
+      // seen through a voxel leaves no doubt that it is empty).
+      const Floats weighed_at = (near ? d : pz) - 0.4f;
+      const Floats weighed_sigma = 0.0012f + 0.0019f * weighed_at * weighed_at;
+      const Floats ratio = sigma_at_1m / weighed_sigma;
+      const Floats w = update ? ratio * ratio * scale : 0.0f;
+
+      Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
+      Ints old_sdf_steps, old_weight_steps;
       for (int x = 0; x < kEdge; ++x) {
-        if (u_of[x] < 0) continue;
-        const std::size_t pixel = static_cast<std::size_t>(v_of[x]) * view.width + u_of[x];
-        const float d = view.depth[pixel];
-        if (!(d > 0.0f)) continue;
-        const float scale = incidenceAt(u_of[x], v_of[x]);
-        const float sdf = (d - depth_of[x]) * scale;  // to the surface, not the pixel
-        const float band = bandAt(d);
-        if (sdf < -band) continue;  // hidden behind the surface: nothing known
-        const bool near = sdf < band;
-        // Free space: as sure as a measurement at the voxel's own depth would be (a far
-        // surface seen through a voxel leaves no doubt that it is empty).
-        const float w = weightAt(near ? d : depth_of[x], scale);
-        VoxelMap::Voxel& voxel = row[x];
-        const float old_weight = voxel.weight(), old_sdf = voxel.sdf();
-        const float alpha = w / (old_weight + w);
-        voxel.set(old_sdf + alpha * (std::min(sdf, band) - old_sdf),
-                  std::min(old_weight + w, VoxelMap::Voxel::kMaxWeight));
-        const int color_pixel =
-            view.color_pixel_of ? view.color_pixel_of[pixel] : static_cast<int>(pixel);
-        if (near && color_pixel >= 0) {  // near the surface: its colour
+        old_sdf_steps[x] = row[x].sdf_steps;
+        old_weight_steps[x] = row[x].weight_steps;
+      }
+      const Floats old_sdf = __builtin_convertvector(old_sdf_steps, Floats) * Voxel::kSdfStep;
+      const Floats old_weight =
+          __builtin_convertvector(old_weight_steps, Floats) * Voxel::kWeightStep;
+      const Floats alpha = update ? w / (old_weight + w) : 0.0f;
+      const Floats target = sdf < band ? sdf : band;
+      const Floats new_sdf = old_sdf + alpha * (target - old_sdf);
+      const Floats summed = old_weight + w;
+      const Floats new_weight = summed < Voxel::kMaxWeight ? summed : Voxel::kMaxWeight;
+      // Voxel::set(new_sdf, new_weight), eight at a time.
+      Floats s = new_sdf * (1.0f / Voxel::kSdfStep);
+      s = s < -32767.0f ? -32767.0f : s;
+      s = s > 32767.0f ? 32767.0f : s;
+      const Ints sdf_steps =
+          __builtin_convertvector(update ? s + 32768.5f : 32768.0f, Ints) - 32768;
+      Floats ws = new_weight * (1.0f / Voxel::kWeightStep) + 0.5f;
+      ws = ws < 1.0f ? 1.0f : ws;
+      ws = ws > 65535.0f ? 65535.0f : ws;
+      const Ints weight_steps = __builtin_convertvector(update ? ws : 0.0f, Ints);
+      const Ints share = __builtin_convertvector(alpha * 256.0f + 0.5f, Ints);
+
+      for (int x = 0; x < kEdge; ++x) {
+        if (!update[x]) continue;
+        Voxel& voxel = row[x];
+        voxel.sdf_steps = static_cast<std::int16_t>(sdf_steps[x]);
+        voxel.weight_steps = static_cast<std::uint16_t>(weight_steps[x]);
+        const int color_pixel = view.color_pixel_of ? view.color_pixel_of[pixel[x]] : pixel[x];
+        if (near[x] && color_pixel >= 0) {  // near the surface: its colour
           const std::uint8_t* c = view.color + 3 * static_cast<std::size_t>(color_pixel);
-          const int share = static_cast<int>(alpha * 256.0f + 0.5f);
-          voxel.r = blend(voxel.r, c[2], share);
-          voxel.g = blend(voxel.g, c[1], share);
-          voxel.b = blend(voxel.b, c[0], share);
+          voxel.r = blend(voxel.r, c[2], share[x]);
+          voxel.g = blend(voxel.g, c[1], share[x]);
+          voxel.b = blend(voxel.b, c[0], share[x]);
         }
         if (voxel.observations < 255) ++voxel.observations;
       }

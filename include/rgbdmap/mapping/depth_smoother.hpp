@@ -1,6 +1,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace rgbdmap {
 
@@ -19,9 +20,16 @@ struct DepthSmoother {
   // its tails would become isolated points 1-2 cm off the surfaces; other views fill in.
   bool drop_unsmoothed = false;
 
-  // Smooths `depth` (CV_32FC1, metres, 0 = missing) in place. The scratch images are reused.
-  void apply(cv::Mat& depth, cv::Mat& inverse, cv::Mat& valid, cv::Mat& sum, cv::Mat& count,
-             cv::Mat& low, cv::Mat& high) const;
+  // What apply() works in, kept between calls so that a frame allocates nothing.
+  struct Buffers {
+    cv::Mat high_of;  // per pixel: its depth as measured (the image is overwritten row by row)
+    cv::Mat inverse_of, count_of, low_of;      // 1 / depth or 0, 1 or 0, depth or +max
+    std::vector<float> sum, count, low, high;  // a row's window columns, padded
+    std::vector<float> window_sum, window_count, window_low, window_high;  // its windows
+  };
+
+  // Smooths `depth` (CV_32FC1, metres, 0 = missing) in place.
+  void apply(cv::Mat& depth, Buffers& buffers) const;
 };
 
 }  // namespace rgbdmap

@@ -37,8 +37,8 @@ class KeyframeIntegrator {
   cv::Mat undistort_map1_, undistort_map2_;  // distorted pixel for each pinhole pixel
   std::vector<int> color_pixel_of_;          // distorted colour pixel for each pinhole pixel
   cv::Mat depth_, scratch_, pinhole_depth_;
-  cv::Mat inverse_, valid_, sum_, count_, low_, high_;  // smoother buffers
-  BackProjector projector_;                             // for the statistical filter
+  DepthSmoother::Buffers smoothing_;
+  BackProjector projector_;  // for the statistical filter
   PointBatch batch_;
 };
 
