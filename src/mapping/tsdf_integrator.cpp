@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 
 #include "rgbdmap/base/vector_clones.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
@@ -18,17 +20,16 @@ constexpr std::size_t kBlocksPerTask = 32;
 constexpr int kAllocationRowsPerTask = 32;
 constexpr std::size_t kScanBlocksPerTask = 4096;
 
-// Whether any lane of a vector comparison's result is set.
+// Whether any lane of a vector comparison's result is set: its bytes as 64-bit words, OR-ed
+// (a test of the whole register, where lane by lane would move each lane out of it).
 template <typename Mask>
 inline bool anyOf(const Mask& mask) {
-  bool any = false;
-  for (int i = 0; i < static_cast<int>(sizeof(mask) / sizeof(mask[0])); ++i) any |= mask[i] != 0;
-  return any;
-}
-
-// old + share / 256 of (new - old), rounded; share in [0, 256].
-std::uint8_t blend(std::uint8_t old_value, std::uint8_t new_value, int share) {
-  return static_cast<std::uint8_t>((old_value * (256 - share) + new_value * share + 128) >> 8);
+  static_assert(sizeof(Mask) % sizeof(std::uint64_t) == 0, "a mask is whole 64-bit words");
+  std::uint64_t words[sizeof(Mask) / sizeof(std::uint64_t)];
+  std::memcpy(words, &mask, sizeof(Mask));
+  std::uint64_t any = 0;
+  for (const std::uint64_t word : words) any |= word;
+  return any != 0;
 }
 
 // The image itself when its rows are contiguous, else a contiguous copy kept in `copy`.
@@ -142,17 +143,15 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   // pixels: the depth averaged over each cell (holes left out) and the normal from the cells on
   // either side. Averaging matters: a single pixel's noise at 3 m (sigma 1.4 cm, twice the pixel
   // spacing) would make every surface look seen head-on.
-  const int cell = std::max(1, normal_cell);
+  cell_bits_ = 0;  // the largest power of two not above normal_cell
+  while ((2 << cell_bits_) <= normal_cell) ++cell_bits_;
+  const int cell = 1 << cell_bits_;
   grid_width_ = (width + cell - 1) / cell;
   grid_height_ = (height + cell - 1) / cell;
   const std::size_t cells = static_cast<std::size_t>(grid_width_) * grid_height_;
   cell_depth_.resize(cells);
   cell_count_.resize(cells);
   cosine_.resize(cells);
-  cell_row_.resize(static_cast<std::size_t>(height));
-  cell_column_.resize(static_cast<std::size_t>(width));
-  for (int v = 0; v < height; ++v) cell_row_[v] = (v / cell) * grid_width_;
-  for (int u = 0; u < width; ++u) cell_column_[u] = u / cell;
 
   const std::size_t tasks =
       static_cast<std::size_t>((grid_height_ + kCellRowsPerTask - 1) / kCellRowsPerTask);
@@ -167,12 +166,12 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
               0);
     for (int v = first * cell; v < std::min(height, last * cell); ++v) {
       const float* in = depth.ptr<float>(v);
-      float* sums = cell_depth_.data() + cell_row_[v];
-      int* counts = cell_count_.data() + cell_row_[v];
+      float* sums = cell_depth_.data() + (v >> cell_bits_) * grid_width_;
+      int* counts = cell_count_.data() + (v >> cell_bits_) * grid_width_;
       for (int u = 0; u < width; ++u) {
         const bool measured = in[u] > 0.0f;
-        sums[cell_column_[u]] += measured ? in[u] : 0.0f;
-        counts[cell_column_[u]] += measured ? 1 : 0;
+        sums[u >> cell_bits_] += measured ? in[u] : 0.0f;
+        counts[u >> cell_bits_] += measured ? 1 : 0;
       }
     }
   });
@@ -225,6 +224,12 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
   constexpr int kEdge = VoxelMap::kBlockEdge;
   using Floats = float __attribute__((vector_size(4 * kEdge)));
   using Ints = std::int32_t __attribute__((vector_size(4 * kEdge)));
+  using Words = std::int32_t __attribute__((vector_size(8 * kEdge)));
+  static_assert(sizeof(VoxelMap::Voxel) == 8 && offsetof(VoxelMap::Voxel, weight_steps) == 2 &&
+                    offsetof(VoxelMap::Voxel, r) == 4 &&
+                    offsetof(VoxelMap::Voxel, observations) == 7,
+                "a voxel is two 32-bit words as read below");
+  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "voxel words are read little-endian");
   const Floats steps = {0, 1, 2, 3, 4, 5, 6, 7};
   static_assert(kEdge == 8, "a row of voxels is one vector of 8");
   using Voxel = VoxelMap::Voxel;
@@ -255,10 +260,11 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
       const Ints u = __builtin_convertvector(inside ? uf : 0.0f, Ints);
       const Ints v = __builtin_convertvector(inside ? vf : 0.0f, Ints);
       const Ints pixel = v * view.width + u;
+      const Ints cell = (v >> cell_bits_) * grid_width_ + (u >> cell_bits_);  // incidenceAt()
       Floats d, scale;
       for (int x = 0; x < kEdge; ++x) {
         d[x] = view.depth[pixel[x]];
-        scale[x] = incidenceAt(u[x], v[x]);
+        scale[x] = cosine_[cell[x]];
       }
       const Floats sdf = (d - pz) * scale;  // to the surface, not the pixel
       const Floats band_sigma = d - 0.4f;   // kinectDepthSigma(d), and the band from it
@@ -269,6 +275,9 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
       const Ints update = inside & (d > 0.0f) & (sdf >= -band);
       if (!anyOf(update)) continue;
       const Ints near = sdf < band;
+      Ints colour_pixel = pixel;  // -1: no colour pixel saw this one
+      if (view.color_pixel_of)
+        for (int x = 0; x < kEdge; ++x) colour_pixel[x] = view.color_pixel_of[pixel[x]];
       // Free space: as sure as a measurement at the voxel's own depth would be (a far surface
       // seen through a voxel leaves no doubt that it is empty).
       const Floats weighed_at = (near ? d : pz) - 0.4f;
@@ -276,12 +285,15 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
       const Floats ratio = sigma_at_1m / weighed_sigma;
       const Floats w = update ? ratio * ratio * scale : 0.0f;
 
+      // The row's 8 voxels as 16 32-bit words: even ones hold the distance (low half) and the
+      // weight, odd ones the colour (r lowest) and the observation count (highest byte).
       Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
-      Ints old_sdf_steps, old_weight_steps;
-      for (int x = 0; x < kEdge; ++x) {
-        old_sdf_steps[x] = row[x].sdf_steps;
-        old_weight_steps[x] = row[x].weight_steps;
-      }
+      Words words;
+      std::memcpy(&words, row, sizeof(words));
+      const Ints steps_word = __builtin_shufflevector(words, words, 0, 2, 4, 6, 8, 10, 12, 14);
+      const Ints colour_word = __builtin_shufflevector(words, words, 1, 3, 5, 7, 9, 11, 13, 15);
+      const Ints old_sdf_steps = (steps_word << 16) >> 16;  // sign-extended
+      const Ints old_weight_steps = (steps_word >> 16) & 0xffff;
       const Floats old_sdf = __builtin_convertvector(old_sdf_steps, Floats) * Voxel::kSdfStep;
       const Floats old_weight =
           __builtin_convertvector(old_weight_steps, Floats) * Voxel::kWeightStep;
@@ -300,22 +312,35 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
       ws = ws < 1.0f ? 1.0f : ws;
       ws = ws > 65535.0f ? 65535.0f : ws;
       const Ints weight_steps = __builtin_convertvector(update ? ws : 0.0f, Ints);
-      const Ints share = __builtin_convertvector(alpha * 256.0f + 0.5f, Ints);
+      const Ints new_steps_word = (sdf_steps & 0xffff) | (weight_steps << 16);
 
-      for (int x = 0; x < kEdge; ++x) {
-        if (!update[x]) continue;
-        Voxel& voxel = row[x];
-        voxel.sdf_steps = static_cast<std::int16_t>(sdf_steps[x]);
-        voxel.weight_steps = static_cast<std::uint16_t>(weight_steps[x]);
-        const int color_pixel = view.color_pixel_of ? view.color_pixel_of[pixel[x]] : pixel[x];
-        if (near[x] && color_pixel >= 0) {  // near the surface: its colour
-          const std::uint8_t* c = view.color + 3 * static_cast<std::size_t>(color_pixel);
-          voxel.r = blend(voxel.r, c[2], share[x]);
-          voxel.g = blend(voxel.g, c[1], share[x]);
-          voxel.b = blend(voxel.b, c[0], share[x]);
+      // Near the surface: its colour, blended by the measurement's share of the weight (. Only the
+      // pixels are fetched one by one.
+      const Ints coloured = update & near & (colour_pixel >= 0);
+      Ints seen = colour_word;
+      if (anyOf(coloured)) {
+        for (int x = 0; x < kEdge; ++x) {
+          if (!coloured[x]) continue;
+          const std::uint8_t* c = view.color + 3 * static_cast<std::ptrdiff_t>(colour_pixel[x]);
+          seen[x] = c[2] | (c[1] << 8) | (c[0] << 16);  // BGR in the image, r lowest here
         }
-        if (voxel.observations < 255) ++voxel.observations;
       }
+      const Ints share = __builtin_convertvector(alpha * 256.0f + 0.5f, Ints);
+      const Ints keep = 256 - share;
+      Ints blended = colour_word & (0xff << 24);
+      for (int channel = 0; channel < 24; channel += 8) {
+        const Ints before = (colour_word >> channel) & 0xff, after = (seen >> channel) & 0xff;
+        blended |= ((before * keep + after * share + 128) >> 8) << channel;
+      }
+      Ints new_colour_word = coloured ? blended : colour_word;
+      // Observations count up to 255.
+      const Ints observations = (colour_word >> 24) & 0xff;
+      new_colour_word += (update & (observations < 255)) ? (1 << 24) : 0;
+
+      const Ints stored_steps = update ? new_steps_word : steps_word;
+      words = __builtin_shufflevector(stored_steps, new_colour_word, 0, 8, 1, 9, 2, 10, 3, 11, 4,
+                                      12, 5, 13, 6, 14, 7, 15);
+      std::memcpy(static_cast<void*>(row), &words, sizeof(words));  // trivially copyable
     }
   }
 }

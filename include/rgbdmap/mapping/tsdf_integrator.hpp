@@ -40,7 +40,7 @@ struct TsdfIntegrator {
   // Blocks a view sees through are looked for in every n-th image only: a scan of the whole map
   // costs about as much as allocating, and what went away is carved a few frames later instead.
   int seen_through_every = 4;
-  int normal_cell = 4;  // incidence is taken on cells of this many pixels squared
+  int normal_cell = 4;  // incidence is taken on cells of this many pixels squared (a power of 2)
 
   // depth: CV_32FC1 metres (0 = none), colour: CV_8UC3 BGR of the same size, pose camera-to-world.
   // With a pool the voxels are updated on all its threads (each block by one thread: the map
@@ -79,16 +79,18 @@ struct TsdfIntegrator {
   void fuseBlock(const ImageView& view, VoxelMap::Block& block) const;
   void prepareIncidence(const cv::Mat& depth, WorkerPool* pool);
   // cos(incidence) of pixel (u, v), clamped at min_incidence_cosine.
-  float incidenceAt(int u, int v) const { return cosine_[cell_row_[v] + cell_column_[u]]; }
+  float incidenceAt(int u, int v) const {
+    return cosine_[(v >> cell_bits_) * grid_width_ + (u >> cell_bits_)];
+  }
   void allocate(const cv::Mat& depth, const Eigen::Isometry3d& pose, VoxelMap& map,
                 WorkerPool* pool);
   void touchSeenThrough(const cv::Mat& depth, const Eigen::Isometry3f& world_to_camera,
                         VoxelMap& map, WorkerPool* pool);
 
-  cv::Mat depth_, color_;                    // continuous copies, made only when the input is not
-  std::vector<float> cell_depth_, cosine_;   // incidence grid, row-major: depth sum, then cosine
-  std::vector<int> cell_count_;              // pixels with depth in each cell
-  std::vector<int> cell_row_, cell_column_;  // pixel row / column -> its cell's offset in the grid
+  cv::Mat depth_, color_;                   // continuous copies, made only when the input is not
+  std::vector<float> cell_depth_, cosine_;  // incidence grid, row-major: depth sum, then cosine
+  std::vector<int> cell_count_;             // pixels with depth in each cell
+  int cell_bits_ = 2;                       // cells are 2^cell_bits_ pixels wide
   int grid_width_ = 0, grid_height_ = 0;
   std::vector<std::vector<Eigen::Vector3i>> crossed_;  // blocks each allocation task's rays cross
   std::vector<std::vector<std::uint32_t>> seen_through_;  // blocks each scan task found
