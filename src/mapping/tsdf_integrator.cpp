@@ -1,9 +1,11 @@
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <limits>
 
 #include "rgbdmap/base/vector_clones.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
@@ -19,6 +21,7 @@ constexpr int kCellRowsPerTask = 8;
 constexpr std::size_t kBlocksPerTask = 32;
 constexpr int kAllocationRowsPerTask = 32;
 constexpr std::size_t kScanBlocksPerTask = 4096;
+constexpr std::size_t kRecentBlocks = 1024;  // a power of 2
 
 // Whether any lane of a vector comparison's result is set: its bytes as 64-bit words, OR-ed
 // (a test of the whole register, where lane by lane would move each lane out of it).
@@ -60,7 +63,11 @@ void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pos
   auto walk = [&](std::size_t task) {
     std::vector<Eigen::Vector3i>& crossed = crossed_[task];
     crossed.clear();
-    Eigen::Vector3i last(INT32_MIN, INT32_MIN, INT32_MIN);
+    // The blocks this task listed last, by a hash of their coordinates: neighbouring rays cross
+    // the same few blocks, and each repeat would cost the map a lookup in its hash table and a
+    // cache miss on the block. Skipping a repeat changes nothing: the map enters a block once.
+    std::array<Eigen::Vector3i, kRecentBlocks> recent;
+    recent.fill(Eigen::Vector3i::Constant(INT32_MIN));
     const int first_row = static_cast<int>(task) * rows_per_task;
     const int last_row = std::min(depth.rows, first_row + rows_per_task);
     for (int v = first_row; v < last_row; v += stride) {
@@ -82,8 +89,12 @@ void TsdfIntegrator::allocate(const cv::Mat& depth, const Eigen::Isometry3d& pos
           const Eigen::Vector3i b(static_cast<int>(std::floor(p.x())),
                                   static_cast<int>(std::floor(p.y())),
                                   static_cast<int>(std::floor(p.z())));
-          if (b == last) continue;
-          last = b;
+          Eigen::Vector3i& seen = recent[(static_cast<std::uint32_t>(b.x()) * 73856093u ^
+                                          static_cast<std::uint32_t>(b.y()) * 19349663u ^
+                                          static_cast<std::uint32_t>(b.z()) * 83492791u) &
+                                         (kRecentBlocks - 1)];
+          if (seen == b) continue;
+          seen = b;
           crossed.push_back(b);
         }
       }
@@ -149,65 +160,73 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   grid_width_ = (width + cell - 1) / cell;
   grid_height_ = (height + cell - 1) / cell;
   const std::size_t cells = static_cast<std::size_t>(grid_width_) * grid_height_;
-  cell_depth_.resize(cells);
-  cell_count_.resize(cells);
   cosine_.resize(cells);
 
   const std::size_t tasks =
       static_cast<std::size_t>((grid_height_ + kCellRowsPerTask - 1) / kCellRowsPerTask);
-  auto run = [&](auto&& task) { runTasks(pool, tasks, task); };
-  // Mean depth of each cell (sum and count of the pixels with depth).
-  run([&](std::size_t task) {
+  cell_point_.resize(cells);
+  column_sums_.resize(tasks * 2 * static_cast<std::size_t>(width));
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  // Each cell's point: the camera-frame point at its centre at its mean depth (holes left out),
+  // or a NaN depth where a quarter of the cell or less holds depth. The pixels are summed down
+  // the cell's rows first (a loop along the row, vectorised), then across its columns.
+  runTasks(pool, tasks, [&](std::size_t task) {
+    float* depth_sum = column_sums_.data() + task * 2 * static_cast<std::size_t>(width);
+    float* count = depth_sum + width;
     const int first = static_cast<int>(task) * kCellRowsPerTask;
     const int last = std::min(grid_height_, first + kCellRowsPerTask);
-    std::fill(cell_depth_.begin() + first * grid_width_, cell_depth_.begin() + last * grid_width_,
-              0.0f);
-    std::fill(cell_count_.begin() + first * grid_width_, cell_count_.begin() + last * grid_width_,
-              0);
-    for (int v = first * cell; v < std::min(height, last * cell); ++v) {
-      const float* in = depth.ptr<float>(v);
-      float* sums = cell_depth_.data() + (v >> cell_bits_) * grid_width_;
-      int* counts = cell_count_.data() + (v >> cell_bits_) * grid_width_;
-      for (int u = 0; u < width; ++u) {
-        const bool measured = in[u] > 0.0f;
-        sums[u >> cell_bits_] += measured ? in[u] : 0.0f;
-        counts[u >> cell_bits_] += measured ? 1 : 0;
+    for (int j = first; j < last; ++j) {
+      std::fill(depth_sum, depth_sum + width, 0.0f);
+      std::fill(count, count + width, 0.0f);
+      const int rows = std::min(cell, height - j * cell);
+      for (int v = j * cell; v < j * cell + rows; ++v) {
+        const float* in = depth.ptr<float>(v);
+        for (int u = 0; u < width; ++u) {
+          const bool measured = in[u] > 0.0f;
+          depth_sum[u] += measured ? in[u] : 0.0f;
+          count[u] += measured ? 1.0f : 0.0f;
+        }
+      }
+      Eigen::Vector3f* points = cell_point_.data() + static_cast<std::size_t>(j) * grid_width_;
+      for (int i = 0; i < grid_width_; ++i) {
+        const int columns = std::min(cell, width - i * cell);
+        float sum = 0.0f, pixels = 0.0f;
+        for (int u = i * cell; u < i * cell + columns; ++u) {
+          sum += depth_sum[u];
+          pixels += count[u];
+        }
+        if (4.0f * pixels < static_cast<float>(rows * columns) || !(pixels > 0.0f)) {
+          points[i] = Eigen::Vector3f(0.0f, 0.0f, std::numeric_limits<float>::quiet_NaN());
+          continue;
+        }
+        const float d = sum / pixels;
+        const float u = (static_cast<float>(i) + 0.5f) * static_cast<float>(cell) - 0.5f;
+        const float v = (static_cast<float>(j) + 0.5f) * static_cast<float>(cell) - 0.5f;
+        points[i] = Eigen::Vector3f((u - cx) / fx * d, (v - cy) / fy * d, d);
       }
     }
   });
 
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
-  // The camera-frame point at the centre of cell (i, j), false where a quarter of the cell or
-  // less holds depth.
-  auto point = [&](int i, int j, Eigen::Vector3f& p) {
-    if (i < 0 || j < 0 || i >= grid_width_ || j >= grid_height_) return false;
-    const std::size_t at = static_cast<std::size_t>(j) * grid_width_ + i;
-    const int pixels = std::min(cell, width - i * cell) * std::min(cell, height - j * cell);
-    if (4 * cell_count_[at] < pixels) return false;
-    const float d = cell_depth_[at] / static_cast<float>(cell_count_[at]);
-    const float u = (static_cast<float>(i) + 0.5f) * static_cast<float>(cell) - 0.5f;
-    const float v = (static_cast<float>(j) + 0.5f) * static_cast<float>(cell) - 0.5f;
-    p = Eigen::Vector3f((u - cx) / fx * d, (v - cy) / fy * d, d);
-    return true;
+  // The normal from central differences of the cells' points, one-sided at holes; a cell with
+  // no neighbour is taken as seen head-on.
+  const auto at = [&](int i, int j, const Eigen::Vector3f& otherwise) -> const Eigen::Vector3f& {
+    if (i < 0 || j < 0 || i >= grid_width_ || j >= grid_height_) return otherwise;
+    const Eigen::Vector3f& p = cell_point_[static_cast<std::size_t>(j) * grid_width_ + i];
+    return std::isnan(p.z()) ? otherwise : p;
   };
-  // Central differences, one-sided at holes; a cell with no neighbour is taken as seen head-on.
-  auto difference = [&](int i, int j, int di, int dj, const Eigen::Vector3f& p) {
-    Eigen::Vector3f after = p, before = p;
-    point(i + di, j + dj, after);
-    point(i - di, j - dj, before);
-    return Eigen::Vector3f(after - before);
-  };
-  run([&](std::size_t task) {
+  runTasks(pool, tasks, [&](std::size_t task) {
     const int first = static_cast<int>(task) * kCellRowsPerTask;
     const int last = std::min(grid_height_, first + kCellRowsPerTask);
     for (int j = first; j < last; ++j) {
       float* out = cosine_.data() + static_cast<std::size_t>(j) * grid_width_;
       for (int i = 0; i < grid_width_; ++i) {
-        Eigen::Vector3f p;
+        const Eigen::Vector3f& p = cell_point_[static_cast<std::size_t>(j) * grid_width_ + i];
         out[i] = 1.0f;
-        if (!point(i, j, p)) continue;
-        const Eigen::Vector3f normal = difference(i, j, 1, 0, p).cross(difference(i, j, 0, 1, p));
+        if (std::isnan(p.z())) continue;
+        const Eigen::Vector3f across = at(i + 1, j, p) - at(i - 1, j, p);
+        const Eigen::Vector3f down = at(i, j + 1, p) - at(i, j - 1, p);
+        const Eigen::Vector3f normal = across.cross(down);
         const float n = normal.norm();
         if (n > 0.0f) out[i] = std::max(std::abs(normal.dot(p)) / (n * p.norm()), min_cos);
       }

@@ -87,10 +87,11 @@ struct TsdfIntegrator {
   void touchSeenThrough(const cv::Mat& depth, const Eigen::Isometry3f& world_to_camera,
                         VoxelMap& map, WorkerPool* pool);
 
-  cv::Mat depth_, color_;                   // continuous copies, made only when the input is not
-  std::vector<float> cell_depth_, cosine_;  // incidence grid, row-major: depth sum, then cosine
-  std::vector<int> cell_count_;             // pixels with depth in each cell
-  int cell_bits_ = 2;                       // cells are 2^cell_bits_ pixels wide
+  cv::Mat depth_, color_;                    // continuous copies, made only when the input is not
+  std::vector<Eigen::Vector3f> cell_point_;  // incidence grid, row-major: each cell's point
+  std::vector<float> cosine_;                // and its incidence
+  std::vector<float> column_sums_;           // per task: depth sums and counts of a cell row
+  int cell_bits_ = 2;                        // cells are 2^cell_bits_ pixels wide
   int grid_width_ = 0, grid_height_ = 0;
   std::vector<std::vector<Eigen::Vector3i>> crossed_;  // blocks each allocation task's rays cross
   std::vector<std::vector<std::uint32_t>> seen_through_;  // blocks each scan task found
