@@ -81,7 +81,7 @@ void Mapper::fuse(const Frame& keyframe) {
   const std::uint64_t fused = stats_.keyframes.fetch_add(1) + 1;
   const auto now = std::chrono::steady_clock::now();
   if (now >= next_count_) {
-    stats_.map_points.store(closed_points_ + map_.pointCount());
+    stats_.map_points.store(closed_points_ + map_.pointCount(&integrator_.pool()));
     next_count_ = now + kCountPointsEvery;
   }
   if (fused % kPruneEvery == 0)

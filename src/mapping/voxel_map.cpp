@@ -6,6 +6,7 @@
 namespace rgbdmap {
 namespace {
 
+constexpr std::size_t kCountBlocksPerTask = 64;  // blocks counted per task
 constexpr int kBits = 21;
 constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20, 2^20) to [0, 2^21)
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
@@ -216,17 +217,29 @@ void VoxelMap::finishIntegration() {
   touched_.clear();
 }
 
-std::size_t VoxelMap::pointCount() {
-  for (const std::uint32_t i : count_due_) {
-    Block& b = blocks_[i];
-    b.count_due = false;
-    if (!b.in_use) continue;
-    std::uint32_t count = 0;
-    forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
-    points_ += count;
-    points_ -= b.surface_points;
-    b.surface_points = count;
-  }
+std::size_t VoxelMap::pointCount(WorkerPool* pool) {
+  // Each block is counted by one task, reading its neighbours' voxels and writing only its own
+  // count; the tasks' totals are then added (integers: the order does not matter).
+  const std::size_t tasks = (count_due_.size() + kCountBlocksPerTask - 1) / kCountBlocksPerTask;
+  count_changes_.assign(tasks, 0);
+  runTasks(pool, tasks, [&](std::size_t task) {
+    const std::size_t first = task * kCountBlocksPerTask;
+    const std::size_t last = std::min(count_due_.size(), first + kCountBlocksPerTask);
+    std::int64_t change = 0;
+    for (std::size_t k = first; k < last; ++k) {
+      Block& b = blocks_[count_due_[k]];
+      b.count_due = false;
+      if (!b.in_use) continue;
+      std::uint32_t count = 0;
+      forEachSurfaceVoxel(b, neighboursOf(b),
+                          [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
+      change += static_cast<std::int64_t>(count) - b.surface_points;
+      b.surface_points = count;
+    }
+    count_changes_[task] = change;
+  });
+  for (const std::int64_t change : count_changes_)
+    points_ = static_cast<std::size_t>(static_cast<std::int64_t>(points_) + change);
   count_due_.clear();
   return points_;
 }

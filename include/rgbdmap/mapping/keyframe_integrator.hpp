@@ -22,6 +22,8 @@ class KeyframeIntegrator {
   // `threads`: threads that fuse (the caller's included), from map.fusion_threads resolved.
   KeyframeIntegrator(const Config& config, int threads = 1);
   void integrate(const Frame& frame, VoxelMap& map, RunStats& stats);
+  // The threads that fuse, for other work on the map between keyframes.
+  WorkerPool& pool() { return pool_; }
 
  private:
   void removeStatisticalOutliers(const Frame& frame);

@@ -11,6 +11,8 @@
 #include <deque>
 #include <vector>
 
+#include "rgbdmap/base/worker_pool.hpp"
+
 namespace rgbdmap {
 
 // Mixes all bits of a packed key: the identity hash std::hash gives integers puts neighbouring
@@ -93,8 +95,9 @@ class VoxelMap {
   std::size_t blockSlots() const { return blocks_.size(); }
   std::size_t memoryBytes() const;
   // Points extract() writes. Counting is left until asked for: after each integration it would
-  // revisit the blocks updated and their neighbours, about a tenth of the fusion time.
-  std::size_t pointCount();
+  // revisit the blocks updated and their neighbours, about a tenth of the fusion time. With a
+  // pool the blocks are counted on all its threads.
+  std::size_t pointCount(WorkerPool* pool = nullptr);
 
   // One coloured point per surface voxel, in a deterministic order (blocks in the order they
   // were created).
@@ -156,7 +159,8 @@ class VoxelMap {
   std::vector<Eigen::Vector3i> coordinates_;  // block coordinates by index (kNoBlock: free)
   std::vector<std::uint32_t> free_;           // pruned slots, reused first
   std::vector<std::uint32_t> touched_;
-  std::vector<std::uint32_t> count_due_;  // blocks with count_due set
+  std::vector<std::uint32_t> count_due_;     // blocks with count_due set
+  std::vector<std::int64_t> count_changes_;  // pointCount(): each task's change to points_
 };
 
 }  // namespace rgbdmap
