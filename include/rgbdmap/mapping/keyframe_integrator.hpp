@@ -27,6 +27,7 @@ class KeyframeIntegrator {
 
  private:
   void removeStatisticalOutliers(const Frame& frame);
+  void undistortDepth();  // depth_ into pinhole_depth_
 
   DepthFilter filter_;
   DepthSmoother smoother_;
@@ -36,8 +37,7 @@ class KeyframeIntegrator {
   int sor_mean_k_ = 50;
   double sor_stddev_ = 1.0;
   bool undistort_ = false;
-  cv::Mat undistort_map1_, undistort_map2_;  // distorted pixel for each pinhole pixel
-  std::vector<int> color_pixel_of_;          // distorted colour pixel for each pinhole pixel
+  std::vector<int> distorted_pixel_of_;  // for each pinhole pixel, the pixel that saw it or -1
   cv::Mat depth_, scratch_, pinhole_depth_;
   DepthSmoother::Buffers smoothing_;
   BackProjector projector_;  // for the statistical filter
