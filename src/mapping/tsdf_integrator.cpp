@@ -243,7 +243,10 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
   constexpr int kEdge = VoxelMap::kBlockEdge;
   using Floats = float __attribute__((vector_size(4 * kEdge)));
   using Ints = std::int32_t __attribute__((vector_size(4 * kEdge)));
-  using Words = std::int32_t __attribute__((vector_size(8 * kEdge)));
+  using Words = std::uint32_t __attribute__((vector_size(8 * kEdge)));
+  // Unsigned where bits are packed and moved: shifts and sums on them must not overflow an int.
+  // (A C-style cast between vector types of one size keeps the bits.)
+  using Uints = std::uint32_t __attribute__((vector_size(4 * kEdge)));
   static_assert(sizeof(VoxelMap::Voxel) == 8 && offsetof(VoxelMap::Voxel, weight_steps) == 2 &&
                     offsetof(VoxelMap::Voxel, r) == 4 &&
                     offsetof(VoxelMap::Voxel, observations) == 7,
@@ -309,10 +312,10 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
       Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
       Words words;
       std::memcpy(&words, row, sizeof(words));
-      const Ints steps_word = __builtin_shufflevector(words, words, 0, 2, 4, 6, 8, 10, 12, 14);
-      const Ints colour_word = __builtin_shufflevector(words, words, 1, 3, 5, 7, 9, 11, 13, 15);
-      const Ints old_sdf_steps = (steps_word << 16) >> 16;  // sign-extended
-      const Ints old_weight_steps = (steps_word >> 16) & 0xffff;
+      const Uints steps_word = __builtin_shufflevector(words, words, 0, 2, 4, 6, 8, 10, 12, 14);
+      const Uints colour_word = __builtin_shufflevector(words, words, 1, 3, 5, 7, 9, 11, 13, 15);
+      const Ints old_sdf_steps = (Ints)(steps_word << 16) >> 16;  // sign-extended
+      const Ints old_weight_steps = (Ints)(steps_word >> 16);
       const Floats old_sdf = __builtin_convertvector(old_sdf_steps, Floats) * Voxel::kSdfStep;
       const Floats old_weight =
           __builtin_convertvector(old_weight_steps, Floats) * Voxel::kWeightStep;
@@ -331,32 +334,32 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
       ws = ws < 1.0f ? 1.0f : ws;
       ws = ws > 65535.0f ? 65535.0f : ws;
       const Ints weight_steps = __builtin_convertvector(update ? ws : 0.0f, Ints);
-      const Ints new_steps_word = (sdf_steps & 0xffff) | (weight_steps << 16);
+      const Uints new_steps_word = ((Uints)sdf_steps & 0xffffu) | ((Uints)weight_steps << 16);
 
-      // Near the surface: its colour, blended by the measurement's share of the weight (. Only the
+      // Near the surface: its colour, blended by the measurement's share of the weight. Only the
       // pixels are fetched one by one.
       const Ints coloured = update & near & (colour_pixel >= 0);
-      Ints seen = colour_word;
+      Uints seen = colour_word;
       if (anyOf(coloured)) {
         for (int x = 0; x < kEdge; ++x) {
           if (!coloured[x]) continue;
           const std::uint8_t* c = view.color + 3 * static_cast<std::ptrdiff_t>(colour_pixel[x]);
-          seen[x] = c[2] | (c[1] << 8) | (c[0] << 16);  // BGR in the image, r lowest here
+          seen[x] = c[2] | (c[1] << 8u) | (c[0] << 16u);  // BGR in the image, r lowest here
         }
       }
-      const Ints share = __builtin_convertvector(alpha * 256.0f + 0.5f, Ints);
-      const Ints keep = 256 - share;
-      Ints blended = colour_word & (0xff << 24);
+      const Uints share = __builtin_convertvector(alpha * 256.0f + 0.5f, Uints);  // 0 to 256
+      const Uints keep = 256u - share;
+      Uints blended = colour_word & 0xff000000u;
       for (int channel = 0; channel < 24; channel += 8) {
-        const Ints before = (colour_word >> channel) & 0xff, after = (seen >> channel) & 0xff;
-        blended |= ((before * keep + after * share + 128) >> 8) << channel;
+        const Uints before = (colour_word >> channel) & 0xffu, after = (seen >> channel) & 0xffu;
+        blended |= ((before * keep + after * share + 128u) >> 8) << channel;
       }
-      Ints new_colour_word = coloured ? blended : colour_word;
+      Uints new_colour_word = coloured ? blended : colour_word;
       // Observations count up to 255.
-      const Ints observations = (colour_word >> 24) & 0xff;
-      new_colour_word += (update & (observations < 255)) ? (1 << 24) : 0;
+      const Uints observations = colour_word >> 24;
+      new_colour_word += (update & (observations < 255u)) ? Uints{} + (1u << 24) : Uints{};
 
-      const Ints stored_steps = update ? new_steps_word : steps_word;
+      const Uints stored_steps = update ? new_steps_word : steps_word;
       words = __builtin_shufflevector(stored_steps, new_colour_word, 0, 8, 1, 9, 2, 10, 3, 11, 4,
                                       12, 5, 13, 6, 14, 7, 15);
       std::memcpy(static_cast<void*>(row), &words, sizeof(words));  // trivially copyable
