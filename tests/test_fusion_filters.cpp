@@ -19,7 +19,7 @@ cv::Mat wallWithHole() {
 }
 
 TEST(FusionFilters, SmoothingNextToHolesStaysFinite) {
-  // Missing pixels must count as nothing (1/0 is inf in OpenCV's float division).
+  // Missing pixels must count as nothing (1/0 is inf).
   cv::Mat depth = wallWithHole();
   DepthSmoother s;
   DepthSmoother::Buffers buffers;

@@ -238,8 +238,9 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
 RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
                                                      VoxelMap::Block& block) const {
   // A row of 8 voxels is updated as one vector (GCC's vector extension: AVX in the x86-64-v3
-  // clone, pairs of SSE registers in the other); only the pixels are fetched one by one. The
-  // arithmetic is the scalar update's: see bandAt(), weightAt() and Voxel::set().
+  // clone, pairs of SSE registers in the other); only the pixels are fetched one by one. It
+  // cannot call scalar functions, so it repeats bandAt() and Voxel::set() (with the same named
+  // constants: KinectNoise, Voxel's steps).
   constexpr int kEdge = VoxelMap::kBlockEdge;
   using Floats = float __attribute__((vector_size(4 * kEdge)));
   using Ints = std::int32_t __attribute__((vector_size(4 * kEdge)));
@@ -288,9 +289,9 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
         d[x] = view.depth[pixel[x]];
         scale[x] = cosine_[cell[x]];
       }
-      const Floats sdf = (d - pz) * scale;  // to the surface, not the pixel
-      const Floats band_sigma = d - 0.4f;   // kinectDepthSigma(d), and the band from it
-      const Floats sigma = 0.0012f + 0.0019f * band_sigma * band_sigma;
+      const Floats sdf = (d - pz) * scale;              // to the surface, not the pixel
+      const Floats band_from = d - KinectNoise::kFrom;  // kinectDepthSigma(d), the band from it
+      const Floats sigma = KinectNoise::kBase + KinectNoise::kGrowth * band_from * band_from;
       const Floats wide = sigmas * sigma;
       const Floats band = wide > narrowest ? wide : narrowest;
       // Behind the surface by more than the band: nothing known.
@@ -302,8 +303,9 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
         for (int x = 0; x < kEdge; ++x) colour_pixel[x] = view.color_pixel_of[pixel[x]];
       // Free space: as sure as a measurement at the voxel's own depth would be (a far surface
       // seen through a voxel leaves no doubt that it is empty).
-      const Floats weighed_at = (near ? d : pz) - 0.4f;
-      const Floats weighed_sigma = 0.0012f + 0.0019f * weighed_at * weighed_at;
+      const Floats weighed_at = (near ? d : pz) - KinectNoise::kFrom;
+      const Floats weighed_sigma =
+          KinectNoise::kBase + KinectNoise::kGrowth * weighed_at * weighed_at;
       const Floats ratio = sigma_at_1m / weighed_sigma;
       const Floats w = update ? ratio * ratio * scale : 0.0f;
 

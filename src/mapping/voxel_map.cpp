@@ -221,7 +221,7 @@ std::size_t VoxelMap::pointCount(WorkerPool* pool) {
   // Each block is counted by one task, reading its neighbours' voxels and writing only its own
   // count; the tasks' totals are then added (integers: the order does not matter).
   const std::size_t tasks = (count_due_.size() + kCountBlocksPerTask - 1) / kCountBlocksPerTask;
-  count_changes_.assign(tasks, 0);
+  std::vector<std::int64_t> changes(tasks, 0);  // at most once a second: allocating is fine
   runTasks(pool, tasks, [&](std::size_t task) {
     const std::size_t first = task * kCountBlocksPerTask;
     const std::size_t last = std::min(count_due_.size(), first + kCountBlocksPerTask);
@@ -236,9 +236,9 @@ std::size_t VoxelMap::pointCount(WorkerPool* pool) {
       change += static_cast<std::int64_t>(count) - b.surface_points;
       b.surface_points = count;
     }
-    count_changes_[task] = change;
+    changes[task] = change;
   });
-  for (const std::int64_t change : count_changes_)
+  for (const std::int64_t change : changes)
     points_ = static_cast<std::size_t>(static_cast<std::int64_t>(points_) + change);
   count_due_.clear();
   return points_;

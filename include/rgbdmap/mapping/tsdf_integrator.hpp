@@ -51,18 +51,13 @@ struct TsdfIntegrator {
   void integrate(const cv::Mat& depth, const cv::Mat& color_bgr, const Eigen::Isometry3d& pose,
                  VoxelMap& map, WorkerPool* pool = nullptr, const int* color_pixel_of = nullptr);
 
-  // What fusion makes of a measured depth: the band it updates (+-band around it) and its
-  // weight, scale / sigma^2 relative to a head-on measurement at 1 m (scale: the distance to the
-  // surface per distance along the ray, cos(incidence)). Computed where needed rather than stored
-  // per pixel: a per-pixel table was four times the depth image and fusion waited on its cache
-  // misses.
+  // The band a measured depth updates (+-band around it). Computed where needed rather than
+  // stored per pixel: a per-pixel table was four times the depth image and fusion waited on its
+  // cache misses. (Its weight is scale / sigma^2 relative to a head-on measurement at 1 m,
+  // scale being cos(incidence): computed in fuseBlock's vector code.)
   float bandAt(float depth) const {
     return std::max(static_cast<float>(truncation),
                     static_cast<float>(truncation_sigmas) * kinectDepthSigma(depth));
-  }
-  float weightAt(float depth, float scale) const {
-    const float r = kinectDepthSigma(1.0f) / kinectDepthSigma(depth);
-    return r * r * scale;
   }
 
  private:

@@ -159,8 +159,7 @@ class VoxelMap {
   std::vector<Eigen::Vector3i> coordinates_;  // block coordinates by index (kNoBlock: free)
   std::vector<std::uint32_t> free_;           // pruned slots, reused first
   std::vector<std::uint32_t> touched_;
-  std::vector<std::uint32_t> count_due_;     // blocks with count_due set
-  std::vector<std::int64_t> count_changes_;  // pointCount(): each task's change to points_
+  std::vector<std::uint32_t> count_due_;  // blocks with count_due set
 };
 
 }  // namespace rgbdmap
