@@ -1,126 +1,25 @@
 // rgbdmap: map a room with an RGB-D camera (or a TUM sequence replayed as one)
 // into a coloured point cloud, checkpointed while it runs.
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <csignal>
-#include <filesystem>
 #include <fstream>
 #include <memory>
-#include <mutex>
-#include <thread>
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/exit_code.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
+#include "rgbdmap/runtime/pose_source.hpp"
+#include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/map_renderer.hpp"
 #include "rgbdmap/tools/run_viewer.hpp"
 
 namespace {
-
-std::string stem(const std::string& path) {
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  return (dot == std::string::npos || (slash != std::string::npos && dot < slash))
-             ? path
-             : path.substr(0, dot);
-}
-
-// Signals are taken by one thread with sigwait, from the first instant of main (the `rgbdmap`
-// launcher blocked them before this program was even loaded), so handlers never run inside the
-// mapping code and no signal can kill the process during start-up.
-// SIGUSR1: checkpoint now (during start-up there is nothing to write yet: a no-op).
-// SIGINT/SIGTERM: stop; during start-up, before mapping begins; while mapping, drain and save.
-// A second SIGINT: quit at once, removing the temporary file of a write in progress (the
-// destination is never half-written).
-class SignalThread {
- public:
-  explicit SignalThread(rgbdmap::RunControl& control) : control_(control) {
-    thread_ = std::thread([this] { run(); });
-  }
-  ~SignalThread() {
-    done_.store(true);
-    pthread_kill(thread_.native_handle(), SIGUSR1);  // wakes it now rather than at its timeout
-    thread_.join();
-  }
-  // From here on SIGUSR1 asks the pipeline for a checkpoint of `map_path` and a stop drains and
-  // saves. Returns false when a stop came first: then nothing is mapped. One lock orders the two,
-  // so a stop during start-up never ends in a saved map (its message said none would be).
-  bool mappingStarts(const std::string& map_path, const std::string& mesh_path = "") {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (control_.stop.load()) return false;
-    map_path_ = map_path;
-    mesh_path_ = mesh_path;
-    mapping_ = true;
-    return true;
-  }
-  static void blockInThisThread() {
-    sigset_t set = signals();
-    pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  }
-  // Subcommands other than mapping keep the default actions (Ctrl-C ends
-  // `synth` at once).
-  static void unblockInThisThread() {
-    sigset_t set = signals();
-    pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
-  }
-
- private:
-  static sigset_t signals() {
-    sigset_t set;
-    sigemptyset(&set);
-    sigaddset(&set, SIGINT);
-    sigaddset(&set, SIGTERM);
-    sigaddset(&set, SIGUSR1);
-    return set;
-  }
-  void run() {
-    const sigset_t set = signals();
-    const timespec timeout{0, 100 * 1000 * 1000};
-    while (!done_.load()) {
-      const int sig = sigtimedwait(&set, nullptr, &timeout);
-      if (done_.load()) break;
-      std::lock_guard<std::mutex> lock(mutex_);
-      const bool mapping = mapping_;
-      if (sig == SIGUSR1) {
-        if (mapping) {
-          spdlog::info("SIGUSR1: writing a checkpoint");
-          control_.snapshot.store(true);
-        } else {
-          spdlog::info("SIGUSR1 during start-up: nothing mapped yet, no checkpoint");
-        }
-      } else if (sig == SIGINT || sig == SIGTERM) {
-        if (control_.stop.exchange(true) && sig == SIGINT) {
-          if (mapping) {
-            std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
-            if (!mesh_path_.empty())
-              std::remove((mesh_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
-            for (const char* trajectory : {"_keyframes.txt.tmp", "_trajectory.txt.tmp"})
-              std::remove((stem(map_path_) + trajectory).c_str());
-          }
-          std::fputs("\nsecond interrupt: quitting without the final save\n", stderr);
-          std::_Exit(130);
-        }
-        const char* name = sig == SIGINT ? "SIGINT" : "SIGTERM";
-        if (mapping)
-          spdlog::info("{}: stopping (interrupt again to quit without saving)", name);
-        else
-          spdlog::info("{} during start-up: stopping before mapping begins", name);
-      }
-    }
-  }
-
-  rgbdmap::RunControl& control_;
-  std::mutex mutex_;  // orders mappingStarts() and the handling of a signal
-  std::string map_path_;
-  std::string mesh_path_;
-  bool mapping_ = false;
-  std::atomic<bool> done_{false};
-  std::thread thread_;
-};
 
 struct MapOptions {
   std::string config_file;
@@ -154,21 +53,6 @@ std::string configurationTable(rgbdmap::Config& config) {
   return table;
 }
 
-// The map's folder is created if missing and must be writable: better to refuse at once than to
-// find out at the first checkpoint, after mapping for a while.
-void checkOutputFolder(const std::string& map_path, const std::string& option = "--out") {
-  namespace fs = std::filesystem;
-  const fs::path folder = fs::path(map_path).parent_path();
-  if (folder.empty()) return;
-  std::error_code ec;
-  if (!fs::is_directory(folder, ec) && !fs::create_directories(folder, ec))
-    throw rgbdmap::InputError(option + " " + map_path + ": cannot create the folder " +
-                              folder.string() + (ec ? " (" + ec.message() + ")" : ""));
-  if (::access(folder.c_str(), W_OK) != 0)
-    throw rgbdmap::InputError(option + " " + map_path + ": the folder " + folder.string() +
-                              " is not writable");
-}
-
 // A stop requested before mapping began: nothing was mapped and nothing is written.
 bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   if (!control.stop.load()) return false;
@@ -176,7 +60,7 @@ bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   return true;
 }
 
-int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& signals) {
+int runMapping(const MapOptions& o, rgbdmap::RunControl& control, rgbdmap::RunSignals& signals) {
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
@@ -193,7 +77,7 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
                   rgbdmap::sourceUsage());
     return 2;
   }
-  checkOutputFolder(o.out);
+  checkOutputFolder(o.out, "--out");
   if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
@@ -205,23 +89,16 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (stoppedDuringStartUp(control)) return 0;
-  if (config.pose_source == "auto")
-    config.pose_source = source->providesPoses() ? "groundtruth" : "odometry";
-  if (config.pose_source == "groundtruth" && !source->providesPoses())
-    throw InputError(
-        source->describe() +
-        ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
+  config.pose_source = resolvePoseSource(
+      config.pose_source, source->providesPoses(),
+      source->describe() +
+          ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
 
-  PipelineOutputs outputs;
-  outputs.map_path = o.out;
-  outputs.trajectory_path = stem(o.out) + "_keyframes.txt";
-  outputs.frame_trajectory_path = stem(o.out) + "_trajectory.txt";
-  outputs.config_path = stem(o.out) + ".yaml";
-  outputs.mesh_path = o.mesh;
+  PipelineOutputs outputs = outputsBeside(o.out, o.mesh);
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
-  if (!signals.mappingStarts(o.out, o.mesh)) {
+  if (!signals.runStarts({temporaryFiles(outputs)})) {
     stoppedDuringStartUp(control);
     return 0;
   }
@@ -239,8 +116,8 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   }
   if (!o.no_render) {
     std::string error;
-    if (renderMapFile(o.out, stem(o.out) + "_keyframes.txt", stem(o.out) + ".png", {}, error))
-      spdlog::info("picture of the map: {}", stem(o.out) + ".png");
+    if (renderMapFile(o.out, outputs.trajectory_path, picturePathOf(o.out), {}, error))
+      spdlog::info("picture of the map: {}", picturePathOf(o.out));
     else
       spdlog::warn("no picture of the map: {}", error);
   }
@@ -250,15 +127,16 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Before any thread exists, so all inherit the mask.
-  SignalThread::blockInThisThread();
+  // Before any thread exists, so all inherit the mask (the `rgbdmap` launcher blocked the signals
+  // before this program was even loaded: none can kill it during start-up).
+  rgbdmap::RunSignals::block();
   // A file-size limit (ulimit -f) must fail the write with EFBIG, reported like a full disk,
   // instead of killing the process.
   std::signal(SIGXFSZ, SIG_IGN);
   // spdlog creates its registry on first use: do it here, before any thread can log.
   spdlog::default_logger_raw();
   rgbdmap::RunControl control;
-  auto signals = std::make_unique<SignalThread>(control);
+  auto signals = std::make_unique<rgbdmap::RunSignals>(control);
   CLI::App app{"rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};
   app.set_version_flag("--version", RGBDMAP_VERSION);
   MapOptions o;
@@ -299,17 +177,13 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
-  try {
+  return rgbdmap::runGuarded([&] {
     if (!selected) return runMapping(o, control, *signals);
+    // Other commands keep the default actions (Ctrl-C ends `synth` at once); `record` takes
+    // the signals again with its own RunSignals.
     signals.reset();
     if (stoppedDuringStartUp(control)) return 0;
-    SignalThread::unblockInThisThread();
+    rgbdmap::RunSignals::unblock();
     return selected();
-  } catch (const rgbdmap::InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  });
 }

@@ -207,5 +207,61 @@ TEST(CheckpointSignal, SecondSigintQuitsWithoutPartialFile) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
 }
 
+// No file of the output folder is a temporary one: neither a write's "<file>.tmp-<pid>" nor a
+// trajectory's loop-closure spool "<file>.anchored".
+void expectNoTemporaryFile(const std::string& dir) {
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << entry.path();
+    EXPECT_EQ(name.find(".anchored"), std::string::npos) << entry.path();
+  }
+}
+
+// A second Ctrl-C while the final save is being written quits at once (exit 130) and leaves no
+// temporary file of any output: map, mesh, trajectories and their spools. The mesh, written last,
+// is held mid-write (StalledWrite), so the second interrupt finds the run writing however loaded
+// the machine is.
+TEST(CheckpointSignal, SecondSigintWhileWritingLeavesNoTemporaryFile) {
+  const std::string dir = test::freshDir();
+  // Slow enough that the replay cannot end before the test has seen a checkpoint; odometry, so
+  // that loop closure spools the trajectories.
+  std::vector<std::string> args = replayArgs(dir, "0.25");
+  args.insert(args.end(), {"--mesh", dir + "/mesh.ply", "--set", "pose.source=odometry"});
+  test::Process p(args, dir + "/log.txt");
+  ASSERT_GT(p.pid(), 0);
+  const auto log = [&] { return test::readFile(dir + "/log.txt"); };
+  ASSERT_TRUE(waitFor([&] { return log().find("loop closure: on") != std::string::npos; }, 120s))
+      << log();
+  // A checkpoint of a real map (one at a time, as in Sigusr1WritesCompleteMapWhileMapping): then
+  // every output and both spools are on disk, and the mesh is larger than the stalled pipe.
+  std::size_t asked = 0;
+  ASSERT_TRUE(waitFor(
+      [&] {
+        const std::vector<std::size_t> points = checkpointPoints(log());
+        if (!points.empty() && points.back() > 1000) return true;
+        if (points.size() == asked) {
+          p.signal(SIGUSR1);
+          ++asked;
+        }
+        return false;
+      },
+      120s))
+      << log();
+  for (const char* spool : {"/map_keyframes.txt.anchored", "/map_trajectory.txt.anchored"})
+    ASSERT_TRUE(fs::exists(dir + spool)) << spool;
+
+  test::StalledWrite mesh(dir + "/mesh.ply.tmp-" + std::to_string(p.pid()));
+  p.signal(SIGINT);
+  ASSERT_TRUE(waitFor([&] { return mesh.begun(); }, 120s)) << log();
+  ASSERT_TRUE(p.running());
+  p.signal(SIGINT);
+  EXPECT_EQ(p.wait(), 130) << log();
+  expectNoTemporaryFile(dir);
+  // What was renamed into place is complete: the final map (written before the mesh) and the
+  // checkpoint's mesh.
+  EXPECT_GT(test::loadMap(dir + "/map.pcd").size(), 1000u);
+  EXPECT_TRUE(fs::exists(dir + "/mesh.ply"));
+}
+
 }  // namespace
 }  // namespace rgbdmap

@@ -3,12 +3,15 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <pcl/io/pcd_io.h>
+#include <poll.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 namespace rgbdmap::test {
@@ -173,6 +176,25 @@ std::string copySequence(const std::string& source, const std::string& target) {
   for (const char* folder : {"rgb", "depth"})
     fs::create_directory_symlink(source + "/" + folder, target + "/" + folder);
   return target;
+}
+
+StalledWrite::StalledWrite(const std::string& path) {
+  EXPECT_EQ(::mkfifo(path.c_str(), 0644), 0) << path << ": " << std::strerror(errno);
+  fd_ = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  EXPECT_GE(fd_, 0) << path << ": " << std::strerror(errno);
+  // The smallest pipe: a few kB of the file fill it.
+  if (fd_ >= 0) {
+    EXPECT_GT(::fcntl(fd_, F_SETPIPE_SZ, 4096), 0) << std::strerror(errno);
+  }
+}
+
+StalledWrite::~StalledWrite() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool StalledWrite::begun() const {
+  pollfd p{fd_, POLLIN, 0};
+  return ::poll(&p, 1, 0) == 1 && (p.revents & POLLIN) != 0;
 }
 
 }  // namespace rgbdmap::test

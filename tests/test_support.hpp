@@ -57,4 +57,21 @@ std::string sharedSynthetic(const std::string& name, const std::string& synth_op
 // Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
 std::string copySequence(const std::string& source, const std::string& target);
 
+// A write that cannot finish, as on a stalled disk: a FIFO at the name a writer will write (a
+// temporary file's), read by nobody. The writer's open succeeds at once (this object holds the
+// reading end) and its writes block once they fill the pipe (one page), so the writing process
+// stays in the middle of that file for as long as a test needs.
+class StalledWrite {
+ public:
+  explicit StalledWrite(const std::string& path);
+  ~StalledWrite();
+  StalledWrite(const StalledWrite&) = delete;
+  StalledWrite& operator=(const StalledWrite&) = delete;
+  // Whether the writer has begun writing the file.
+  bool begun() const;
+
+ private:
+  int fd_ = -1;
+};
+
 }  // namespace rgbdmap::test

@@ -2,19 +2,17 @@
 // TUM folder) as a TUM RGB-D folder, so captures can be replayed with --source tum:DIR and shared.
 #include <spdlog/spdlog.h>
 
-#include <atomic>
 #include <cerrno>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
+#include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/fakenect_dump.hpp"
@@ -33,43 +31,6 @@ struct RecordOptions {
   std::string config_file;
   std::vector<std::string> sets;
   std::string format = "tum";  // or "fakenect"
-};
-
-// SIGINT/SIGTERM ask the recording to stop after the frame in hand. Signals are taken with
-// sigtimedwait on a thread of their own (main blocks them in every thread), never in a handler.
-class StopOnSignal {
- public:
-  StopOnSignal() {
-    sigemptyset(&set_);
-    sigaddset(&set_, SIGINT);
-    sigaddset(&set_, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &set_, nullptr);
-    thread_ = std::thread([this] {
-      const timespec timeout{0, 100 * 1000 * 1000};
-      while (!done_.load()) {
-        const int sig = sigtimedwait(&set_, nullptr, &timeout);
-        if (sig == SIGINT || sig == SIGTERM) {
-          if (stop_.exchange(true) && sig == SIGINT) {
-            std::fputs("\nsecond interrupt: quitting now (the lists hold every saved frame)\n",
-                       stderr);
-            std::_Exit(130);
-          }
-          spdlog::info("{}: stopping after this frame", sig == SIGINT ? "SIGINT" : "SIGTERM");
-        }
-      }
-    });
-  }
-  ~StopOnSignal() {
-    done_.store(true);
-    thread_.join();
-  }
-  bool stopRequested() const { return stop_.load(); }
-
- private:
-  sigset_t set_;
-  std::atomic<bool> stop_{false};
-  std::atomic<bool> done_{false};
-  std::thread thread_;
 };
 
 // One TUM list (rgb.txt or depth.txt), each line flushed as soon as its image is complete, so an
@@ -95,9 +56,11 @@ class TumList {
   std::ofstream out_;
 };
 
-// Writes an image beside its final name and renames it, so no half-written PNG is ever listed.
-void writePng(const cv::Mat& image, const fs::path& path) {
-  const fs::path partial = fs::path(path).replace_extension(".partial.png");
+// Every image is written to one temporary file in the recording's folder and renamed into place,
+// so no half-written PNG is ever listed, and a second Ctrl-C knows which file to remove.
+fs::path partialImageIn(const fs::path& out) { return out / ".partial.png"; }
+
+void writePng(const cv::Mat& image, const fs::path& partial, const fs::path& path) {
   std::string error;
   bool ok = false;
   try {
@@ -137,13 +100,13 @@ std::uint64_t toTumDepth(const cv::Mat& metres, cv::Mat& units) {
 }
 
 // A source as a fakenect dump: every frame the source gives, until it ends or Ctrl-C.
-int recordFakenect(const RecordOptions& o, const Config& config, const StopOnSignal& signals) {
+int recordFakenect(const RecordOptions& o, const Config& config, const RunControl& control) {
   FakenectDump dump(o.out);
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   const std::string origin = source->describe();
   spdlog::info("recording {} into {} as a fakenect dump", origin, o.out);
   Frame frame;
-  while (!signals.stopRequested() && (o.frames == 0 || dump.frames() < o.frames)) {
+  while (!control.stop.load() && (o.frames == 0 || dump.frames() < o.frames)) {
     const ReadStatus status = source->read(frame);
     if (status == ReadStatus::kEnd) break;
     if (status == ReadStatus::kSkipped) continue;
@@ -162,7 +125,16 @@ int recordFakenect(const RecordOptions& o, const Config& config, const StopOnSig
 }
 
 int record(const RecordOptions& o) {
-  StopOnSignal signals;  // before the source starts any thread, so they inherit the mask
+  RunControl control;
+  RunSignals signals(control);  // before the source starts any thread, so they inherit the mask
+  // A recording saves every frame as it goes: no checkpoint to take, and a stop ends it after the
+  // frame in hand.
+  RunSignals::Run run;
+  if (o.format == "tum") run.temporary_files = {partialImageIn(o.out).string()};
+  run.checkpoints = false;
+  run.stopping = "stopping after this frame";
+  run.quitting = "quitting now (the lists hold every saved frame)";
+  signals.runStarts(run);
   Config config;
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   config.set("replay.rate", "0", "record");  // recordings and folders: every frame, lossless
@@ -172,7 +144,7 @@ int record(const RecordOptions& o) {
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
   }
 
-  if (o.format == "fakenect") return recordFakenect(o, config, signals);
+  if (o.format == "fakenect") return recordFakenect(o, config, control);
   const fs::path out(o.out);
   std::error_code ec;
   if (fs::exists(out / "rgb.txt", ec) || fs::exists(out / "depth.txt", ec))
@@ -193,7 +165,7 @@ int record(const RecordOptions& o) {
   std::uint64_t written = 0, too_far = 0, out_of_order = 0;
   double last_stamp = 0;
   char stamp[64];
-  while (!signals.stopRequested() && (o.frames == 0 || written < o.frames)) {
+  while (!control.stop.load() && (o.frames == 0 || written < o.frames)) {
     const ReadStatus status = source->read(frame);
     if (status == ReadStatus::kEnd) break;
     if (status == ReadStatus::kSkipped) continue;
@@ -203,7 +175,7 @@ int record(const RecordOptions& o) {
           "{}: camera stopped delivering frames; waiting for it (Ctrl-C stops, keeping "
           "the {} frames saved)",
           origin, written);
-      while (!signals.stopRequested() && !source->reconnect()) {
+      while (!control.stop.load() && !source->reconnect()) {
       }
       continue;
     }
@@ -219,9 +191,9 @@ int record(const RecordOptions& o) {
     last_stamp = rounded_stamp;
     const std::string rgb_file = std::string("rgb/") + stamp + ".png";
     const std::string depth_file = std::string("depth/") + stamp + ".png";
-    writePng(frame.color, out / rgb_file);
+    writePng(frame.color, partialImageIn(out), out / rgb_file);
     too_far += toTumDepth(frame.depth, depth_units);
-    writePng(depth_units, out / depth_file);
+    writePng(depth_units, partialImageIn(out), out / depth_file);
     rgb_list.add(stamp, rgb_file);
     depth_list.add(stamp, depth_file);
     ++written;

@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/run_viewer.hpp"
@@ -19,21 +20,14 @@ bool exists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
-std::string stem(const std::string& path) {
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  return (dot == std::string::npos || (slash != std::string::npos && dot < slash))
-             ? path
-             : path.substr(0, dot);
-}
-
 // The camera's path: the per-frame trajectory (MAP_trajectory.txt) when there is one, else the
 // keyframes (MAP_keyframes.txt); keyframes are marked.
 std::vector<TrajectoryPoint> savedTrajectory(const std::string& map_path,
                                              Eigen::Isometry3d& first) {
   Trajectory keyframes, frames;
-  for (auto [path, trajectory] : {std::pair{stem(map_path) + "_keyframes.txt", &keyframes},
-                                  std::pair{stem(map_path) + "_trajectory.txt", &frames}}) {
+  const PipelineOutputs beside = outputsBeside(map_path);
+  for (auto [path, trajectory] : {std::pair{beside.trajectory_path, &keyframes},
+                                  std::pair{beside.frame_trajectory_path, &frames}}) {
     if (!exists(path)) continue;
     *trajectory = Trajectory::load(path);  // InputError names the file and line
     spdlog::info("view: {} poses from {}", trajectory->size(), path);

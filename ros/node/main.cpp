@@ -6,93 +6,24 @@
 #include <ros/ros.h>
 #include <spdlog/spdlog.h>
 #include <std_srvs/Trigger.h>
-#include <unistd.h>
 
 #include <csignal>
-#include <filesystem>
 #include <fstream>
 #include <thread>
 
 #include "rgbdmap/base/config.hpp"
-#include "rgbdmap/base/error.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
 #include "rgbdmap/ros/topic_source.hpp"
+#include "rgbdmap/runtime/exit_code.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
+#include "rgbdmap/runtime/pose_source.hpp"
+#include "rgbdmap/runtime/run_signals.hpp"
 
 namespace {
 
 using namespace rgbdmap;
-
-sigset_t handledSignals() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  sigaddset(&set, SIGUSR1);
-  return set;
-}
-
-// Signals are taken by this thread with sigwait (blocked everywhere else, before any thread
-// exists), so no handler runs inside ROS or mapping code. ROS's own SIGINT handler is off.
-class SignalThread {
- public:
-  explicit SignalThread(RunControl& control) : control_(control) {
-    thread_ = std::thread([this] { run(); });
-  }
-  ~SignalThread() {
-    done_.store(true);
-    thread_.join();
-  }
-  void setMapPath(const std::string& path) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    map_path_ = path;
-  }
-
- private:
-  void run() {
-    const sigset_t set = handledSignals();
-    const timespec timeout{0, 100 * 1000 * 1000};
-    while (!done_.load()) {
-      const int sig = sigtimedwait(&set, nullptr, &timeout);
-      if (sig == SIGUSR1) {
-        spdlog::info("SIGUSR1: writing a checkpoint");
-        control_.snapshot.store(true);
-      } else if (sig == SIGINT || sig == SIGTERM) {
-        if (control_.stop.exchange(true) && sig == SIGINT) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          if (!map_path_.empty())
-            std::remove((map_path_ + ".tmp-" + std::to_string(::getpid())).c_str());
-          std::fputs("\nsecond interrupt: quitting without the final save\n", stderr);
-          std::_Exit(130);
-        }
-        spdlog::info("{}: stopping (interrupt again to quit without saving)",
-                     sig == SIGINT ? "SIGINT" : "SIGTERM");
-      }
-    }
-  }
-  RunControl& control_;
-  std::mutex mutex_;
-  std::string map_path_;
-  std::atomic<bool> done_{false};
-  std::thread thread_;
-};
-
-std::string stem(const std::string& path) {
-  const std::filesystem::path p(path);
-  return (p.parent_path() / p.stem()).string();
-}
-
-void checkOutputFolder(const std::string& map_path) {
-  namespace fs = std::filesystem;
-  const fs::path folder = fs::path(map_path).parent_path();
-  if (folder.empty()) return;
-  std::error_code ec;
-  if (!fs::is_directory(folder, ec) && !fs::create_directories(folder, ec))
-    throw InputError("~out " + map_path + ": cannot create the folder " + folder.string());
-  if (::access(folder.c_str(), W_OK) != 0)
-    throw InputError("~out " + map_path + ": the folder " + folder.string() + " is not writable");
-}
 
 // ~save_map and ~snapshot: ask for a checkpoint as SIGUSR1 does, and answer once it is written
 // (or failed), so that the caller can use the file at once.
@@ -132,15 +63,14 @@ std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c
   return out;
 }
 
-int runNode(RunControl& control, SignalThread& signals) {
+int runNode(RunControl& control, RunSignals& signals) {
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
   const NodeSettings settings = readNodeSettings(pnh);
   Config config;
   config.loadPreset(settings.config);
   applyPrivateParams(pnh, config);
-  checkOutputFolder(settings.out);
-  signals.setMapPath(settings.out);
+  checkOutputFolder(settings.out, "~out");
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.
   ros::AsyncSpinner image_spinner(1);
@@ -152,11 +82,15 @@ int runNode(RunControl& control, SignalThread& signals) {
     topics.shutdown();
     return 0;
   }
-  if (config.pose_source == "auto") config.pose_source = "odometry";
-  if (config.pose_source == "groundtruth")
-    throw InputError(
-        "pose.source=groundtruth: a ROS camera has no ground truth; use odometry "
-        "or trajectory");
+  config.pose_source = resolvePoseSource(
+      config.pose_source, topics.providesPoses(),
+      "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
+  PipelineOutputs outputs = outputsBeside(settings.out);
+  if (!signals.runStarts({temporaryFiles(outputs)})) {
+    spdlog::info("stopped during start-up: nothing mapped, no map written");
+    topics.shutdown();
+    return 0;
+  }
 
   RosPublisher::Options publish;
   publish.map_frame = settings.map_frame;
@@ -168,11 +102,6 @@ int runNode(RunControl& control, SignalThread& signals) {
   publish.map_interval = settings.map_interval;
   RosPublisher publisher(pnh, publish);
 
-  PipelineOutputs outputs;
-  outputs.map_path = settings.out;
-  outputs.trajectory_path = stem(settings.out) + "_keyframes.txt";
-  outputs.frame_trajectory_path = stem(settings.out) + "_trajectory.txt";
-  outputs.config_path = stem(settings.out) + ".yaml";
   outputs.status_line = false;
   outputs.publisher = &publisher;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
@@ -222,25 +151,17 @@ int runNode(RunControl& control, SignalThread& signals) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Before any thread exists, so that all inherit the mask.
-  const sigset_t set = handledSignals();
-  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  // Before any thread exists, so that all inherit the mask: signals are taken by RunSignals'
+  // thread, never by a handler inside ROS or mapping code. ROS's own SIGINT handler is off.
+  RunSignals::block();
   std::signal(SIGXFSZ, SIG_IGN);
   spdlog::default_logger_raw();
   ros::init(argc, argv, "rgbdmap", ros::init_options::NoSigintHandler);
   RunControl control;
   int code = 0;
   {
-    SignalThread signals(control);
-    try {
-      code = runNode(control, signals);
-    } catch (const InputError& e) {
-      spdlog::error("{}", e.what());
-      code = 2;
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      code = 1;
-    }
+    RunSignals signals(control);
+    code = runGuarded([&] { return runNode(control, signals); });
   }
   ros::shutdown();
   return code;

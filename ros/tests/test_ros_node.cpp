@@ -258,5 +258,37 @@ TEST_F(RosNode, UnsupportedEncodingIsOneClearMessage) {
   player.wait(30);
 }
 
+// A second Ctrl-C while the final save is being written quits at once (exit 130), as the CLI's
+// does, and leaves no temporary file: neither the map's (held mid-write by a StalledWrite, so the
+// second interrupt finds the node writing however loaded the machine is) nor the trajectories'
+// loop-closure spools.
+TEST_F(RosNode, SecondSigintWhileWritingLeavesNoTemporaryFile) {
+  const std::string node_log = dir_ + "/node.log";
+  Process node(nodeArgs(dir_, ""), node_log);
+  auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
+  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+  // A checkpoint: the map, both trajectories and their spools (odometry, loop closure) on disk.
+  ASSERT_TRUE(ros::service::waitForService("/rgbdmap/save_map", ros::Duration(60)))
+      << readFile(node_log);
+  std_srvs::Trigger save;
+  ASSERT_TRUE(ros::service::call("/rgbdmap/save_map", save)) << readFile(node_log);
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  for (const char* spool : {"/map_keyframes.txt.anchored", "/map_trajectory.txt.anchored"})
+    ASSERT_TRUE(std::filesystem::exists(dir_ + spool)) << spool << "\n" << readFile(node_log);
+
+  StalledWrite map(dir_ + "/map.pcd.tmp-" + std::to_string(node.pid()));
+  node.signal(SIGINT);
+  ASSERT_TRUE(waitUntil([&] { return map.begun(); }, 120)) << readFile(node_log);
+  ASSERT_TRUE(node.running());
+  node.signal(SIGINT);
+  EXPECT_EQ(node.wait(60), 130) << readFile(node_log);
+  for (const auto& entry : std::filesystem::directory_iterator(dir_)) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << entry.path();
+    EXPECT_EQ(name.find(".anchored"), std::string::npos) << entry.path();
+  }
+  EXPECT_GT(loadMap(dir_ + "/map.pcd").size(), 0u) << "the checkpoint's map stays complete";
+}
+
 }  // namespace
 }  // namespace rgbdmap::test

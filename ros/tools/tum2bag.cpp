@@ -17,6 +17,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/text_lines.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/runtime/exit_code.hpp"
 
 namespace {
 
@@ -151,13 +152,5 @@ int main(int argc, char** argv) {
   app.add_flag("--depth16", depth16, "depth as 16UC1 millimetres instead of 32FC1 metres");
   app.add_option("--limit", limit, "only the first N images of each list");
   CLI11_PARSE(app, argc, argv);
-  try {
-    return convert(folder, out, preset, depth16, limit);
-  } catch (const rgbdmap::InputError& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return rgbdmap::runGuarded([&] { return convert(folder, out, preset, depth16, limit); });
 }

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <vector>
 
+#include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 
 namespace rgbdmap {
@@ -88,7 +89,7 @@ bool writePcd(const MapCloud& cloud, int fd) {
 
 bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
                          std::string& error) {
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  const std::string tmp = temporaryFileOf(path);
   const auto fail = [&](const std::string& what, int fd) {
     const int saved = errno;
     error = path + ": " + what + " " + tmp + ": " + describeErrno(saved);

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -37,7 +38,7 @@ std::string failure(const std::string& file, const char* what) {
 }  // namespace
 
 TrajectoryStream::TrajectoryStream(std::string path, const PoseCorrections* corrections)
-    : path_(std::move(path)), spool_(path_ + ".anchored"), corrections_(corrections) {}
+    : path_(std::move(path)), spool_(spoolFileOf(path_)), corrections_(corrections) {}
 
 TrajectoryStream::~TrajectoryStream() {
   if (corrections_ && started_) std::remove(spool_.c_str());

@@ -1,0 +1,37 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "rgbdmap/runtime/pipeline.hpp"
+
+namespace rgbdmap {
+
+// The files a mapping run writes and the temporary files their writers keep while writing, named
+// by one rule for the writers, for the front doors and for the second Ctrl-C that removes them.
+
+// The path without its file name's extension: "out/map.pcd" -> "out/map". What follows the file
+// name's last dot is the extension, also when that dot is the name's first character
+// ("out/.pcd" -> "out/"); a name without a dot is kept whole ("out.d/map" -> "out.d/map").
+std::string stem(const std::string& path);
+
+// "<path>.tmp-<pid>": where writeFileAtomically writes `path` before renaming it into place.
+std::string temporaryFileOf(const std::string& path);
+// "<path>.anchored": the spool beside a trajectory file when loop closure can still move its
+// poses (TrajectoryStream).
+std::string spoolFileOf(const std::string& trajectory_path);
+
+// The files of a run whose map is `map_path`: the map, and beside it MAP_keyframes.txt,
+// MAP_trajectory.txt and MAP.yaml (docs/usage.md), with `mesh_path` ("" = no mesh).
+PipelineOutputs outputsBeside(const std::string& map_path, const std::string& mesh_path = "");
+// MAP.png, the picture of the map the CLI renders after a run.
+std::string picturePathOf(const std::string& map_path);
+// Every temporary file the writers of `outputs` may have on disk while the run goes on.
+std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs);
+
+// The folder of an output file is created if missing and must be writable: better to refuse at
+// once than to find out at the first checkpoint, after mapping for a while. Throws InputError
+// naming `option` ("--out", "~out") and the path.
+void checkOutputFolder(const std::string& path, const std::string& option);
+
+}  // namespace rgbdmap

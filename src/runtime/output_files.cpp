@@ -1,0 +1,66 @@
+#include "rgbdmap/runtime/output_files.hpp"
+
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "rgbdmap/base/error.hpp"
+
+namespace rgbdmap {
+
+std::string stem(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  const std::size_t dot = path.find_last_of('.');
+  const bool in_file_name = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return in_file_name ? path.substr(0, dot) : path;
+}
+
+// The pid keeps two runs that write the same map (by mistake) from writing one temporary file.
+std::string temporaryFileOf(const std::string& path) {
+  return path + ".tmp-" + std::to_string(::getpid());
+}
+
+std::string spoolFileOf(const std::string& trajectory_path) {
+  return trajectory_path + ".anchored";
+}
+
+PipelineOutputs outputsBeside(const std::string& map_path, const std::string& mesh_path) {
+  PipelineOutputs outputs;
+  outputs.map_path = map_path;
+  outputs.trajectory_path = stem(map_path) + "_keyframes.txt";
+  outputs.frame_trajectory_path = stem(map_path) + "_trajectory.txt";
+  outputs.config_path = stem(map_path) + ".yaml";
+  outputs.mesh_path = mesh_path;
+  return outputs;
+}
+
+std::string picturePathOf(const std::string& map_path) { return stem(map_path) + ".png"; }
+
+// The map and the mesh are written atomically; a trajectory is appended to in place, or, with
+// loop closure, spooled and rewritten atomically. The effective configuration is written once,
+// before mapping, and needs no temporary file.
+std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs) {
+  std::vector<std::string> files;
+  for (const std::string* path : {&outputs.map_path, &outputs.mesh_path})
+    if (!path->empty()) files.push_back(temporaryFileOf(*path));
+  for (const std::string* path : {&outputs.trajectory_path, &outputs.frame_trajectory_path}) {
+    if (path->empty()) continue;
+    files.push_back(temporaryFileOf(*path));
+    files.push_back(spoolFileOf(*path));
+  }
+  return files;
+}
+
+void checkOutputFolder(const std::string& path, const std::string& option) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::path(path).parent_path();
+  if (folder.empty()) return;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec) && !fs::create_directories(folder, ec))
+    throw InputError(option + " " + path + ": cannot create the folder " + folder.string() +
+                     (ec ? " (" + ec.message() + ")" : ""));
+  if (::access(folder.c_str(), W_OK) != 0)
+    throw InputError(option + " " + path + ": the folder " + folder.string() + " is not writable");
+}
+
+}  // namespace rgbdmap
