@@ -30,7 +30,12 @@ TrackingThread::TrackingThread(Parts parts, bool wait_for_fusion, CheckpointPoli
       last_checkpoint_(steadySeconds()),
       thread_([this] { run(); }) {}
 
-TrackingThread::~TrackingThread() { join(); }
+TrackingThread::~TrackingThread() {
+  // Still running only when the run is left by an exception: stop it rather than wait for the
+  // source to end.
+  if (thread_.joinable()) control_.stop.store(true);
+  join();
+}
 
 void TrackingThread::join() {
   if (thread_.joinable()) thread_.join();

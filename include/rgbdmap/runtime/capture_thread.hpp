@@ -1,6 +1,6 @@
 #pragma once
 
-#include <atomic>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <thread>
@@ -25,7 +25,7 @@ class CaptureThread {
   // Starts the thread. `on_error` is called once, from the thread, with what made it stop.
   CaptureThread(FrameSource& source, FrameQueue& queue, RunStats& stats, RunControl& control,
                 ErrorHandler on_error);
-  ~CaptureThread();  // join()
+  ~CaptureThread();  // stops the run if still going, then join()
 
   void join();
 

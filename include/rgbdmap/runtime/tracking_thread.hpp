@@ -48,7 +48,7 @@ class TrackingThread {
   // `checkpoint` asks for one; `on_error` is told of a frame that failed (the thread goes on).
   TrackingThread(Parts parts, bool wait_for_fusion, CheckpointPolicy policy, Checkpoint checkpoint,
                  RunStats& stats, RunControl& control, ErrorHandler on_error);
-  ~TrackingThread();  // join()
+  ~TrackingThread();  // stops the run if still going, then join()
 
   // Set once every frame is taken and the last checkpoint request made.
   bool done() const { return done_.load(); }
