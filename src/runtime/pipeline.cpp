@@ -1,20 +1,20 @@
 #include "rgbdmap/runtime/pipeline.hpp"
 
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <fstream>
 #include <mutex>
-#include <thread>
 
-#include "rgbdmap/base/error.hpp"
-#include "rgbdmap/mapping/frame_tracker.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
+#include "rgbdmap/runtime/capture_thread.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
+#include "rgbdmap/runtime/frame_tracker.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
+#include "rgbdmap/runtime/status_line.hpp"
+#include "rgbdmap/runtime/tracking_thread.hpp"
 #include "rgbdmap/runtime/unmapped_frames.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
@@ -28,8 +28,6 @@ using Clock = std::chrono::steady_clock;
 // absorb a burst (a fast turn) while fusion catches up; more would only let the map lag further
 // behind tracking (each slot holds a 640x480 frame).
 constexpr std::size_t kFusionSlots = 4;
-
-double now() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
 
 // Remembers the first fatal error of any thread.
 class FirstError {
@@ -48,26 +46,23 @@ class FirstError {
   std::string message_;
 };
 
-// " | loops N" while loop closure runs (the status line says when a loop closed).
-std::string loops(const RunStats& s) {
-  if (!s.loop_closure) return "";
-  return " | loops " + std::to_string(s.loops_accepted.load());
+// The configuration the run's parts are built with (and the effective configuration written):
+// the source's camera, and the fusion threads resolved. Made once, before any thread starts;
+// nothing changes it afterwards.
+Config forSource(Config config, const FrameSource& source) {
+  config.camera = source.intrinsics();
+  // A live camera leaves the other cores to tracking; a replay is limited by fusion alone.
+  if (config.map_fusion_threads == 0)
+    config.map_fusion_threads = source.isLive() ? 1 : WorkerPool::resolve(0);
+  return config;
 }
 
-std::string statusLine(const RunStats& s, double elapsed) {
-  char line[256];
-  std::snprintf(line, sizeof line,
-                "frames %llu read, %llu dropped, %llu skipped | %.1f fps | keyframes %llu | map "
-                "%llu points | queue %llu%s%s",
-                static_cast<unsigned long long>(s.frames_captured.load()),
-                static_cast<unsigned long long>(s.frames_dropped.load()),
-                static_cast<unsigned long long>(s.frames_skipped.load()),
-                elapsed > 0 ? static_cast<double>(s.frames_processed.load()) / elapsed : 0.0,
-                static_cast<unsigned long long>(s.keyframes.load()),
-                static_cast<unsigned long long>(s.map_points.load()),
-                static_cast<unsigned long long>(s.queue_depth.load()), loops(s).c_str(),
-                s.tracking_lost.load() ? " | tracking lost" : "");
-  return line;
+CheckpointPolicy checkpointPolicy(const Config& config) {
+  CheckpointPolicy policy;
+  policy.every_keyframes = config.checkpoint_every_keyframes;
+  policy.min_seconds = config.checkpoint_min_seconds;
+  policy.every_seconds = config.checkpoint_every_seconds;
+  return policy;
 }
 
 // A trajectory file streamed as it is recorded (null when not asked for).
@@ -88,25 +83,64 @@ CheckpointWriter::MeshFile meshFile(const PipelineOutputs& outputs, const Mapper
   return {std::move(mesh), outputs.mesh_path};
 }
 
+// Counts and logs every write of the checkpoint writer (on its thread).
+CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh_path) {
+  return [&stats, mesh_path](const CheckpointWriter::Result& r) {
+    if (r.mesh_seconds > 0.0) stats.mesh_write_latency.record(r.mesh_seconds);
+    if (r.ok && !mesh_path.empty()) {
+      stats.mesh_triangles.store(r.mesh_triangles);
+      spdlog::info("mesh: {} triangles written to {} in {:.2f} s", r.mesh_triangles, mesh_path,
+                   r.mesh_seconds);
+    }
+    if (r.ok) {
+      stats.checkpoints_written.fetch_add(1);
+      spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
+    } else {
+      stats.checkpoints_failed.fetch_add(1);
+      spdlog::error("checkpoint failed, mapping goes on: {}", r.error);
+    }
+  };
+}
+
+// The final save, through the writer so it is ordered after any checkpoint in flight, and the
+// memory the run ended with. Returns 1 when the map could not be written, else 0.
+int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
+                 const std::vector<CheckpointWriter::TrajectoryFile>& trajectory_files,
+                 MapPublication& publication, const PipelineOutputs& outputs, RunStats& stats) {
+  const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
+  writer.submit(final_map, outputs.map_path, trajectory_files, meshFile(outputs, mapper, stats));
+  publication.atEnd(final_map);
+  const CheckpointWriter::Result final_write = writer.flush();
+  int exit_code = 0;
+  if (!final_write.ok) {
+    spdlog::error("final map not saved: {}", final_write.error);
+    exit_code = 1;
+  } else {
+    spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
+  }
+  stats.peak_rss_mb = peakRssMb();
+  stats.mesh_memory_mb = static_cast<double>(mapper.meshMemoryBytes()) / (1024.0 * 1024.0);
+  stats.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
+  return exit_code;
+}
+
 }  // namespace
 
 Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs)
     : config_(std::move(config)), source_(std::move(source)), outputs_(std::move(outputs)) {}
 
 int Pipeline::run(RunControl& control) {
-  const CameraIntrinsics camera = source_->intrinsics();
-  config_.camera = camera;
-  // A live camera leaves the other cores to tracking; a replay is limited by fusion alone.
-  if (config_.map_fusion_threads == 0)
-    config_.map_fusion_threads = source_->isLive() ? 1 : WorkerPool::resolve(0);
+  Config config = forSource(config_, *source_);
+  const CameraIntrinsics camera = config.camera;
+  const bool live = source_->isLive();
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
   // move the trajectories and the map's submaps.
-  stats_.loop_closure = config_.loop.enabled && tracksKeyframes(config_);
+  stats_.loop_closure = config.loop.enabled && tracksKeyframes(config);
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
   if (stats_.loop_closure) {
     corrections = std::make_unique<PoseCorrections>();
-    loop_closer = std::make_unique<LoopCloser>(config_, *corrections, stats_, !source_->isLive());
+    loop_closer = std::make_unique<LoopCloser>(config, *corrections, stats_, !live);
   }
   // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
   // frame (from the tracking side), streamed to their files rather than held.
@@ -117,100 +151,31 @@ int Pipeline::run(RunControl& control) {
   std::vector<CheckpointWriter::TrajectoryFile> trajectory_files;
   for (const auto& file : {keyframe_file, frame_file})
     if (file) trajectory_files.push_back(file);
-  FrameTracker tracker(config_, makePoseProvider(config_, loop_closer.get()), stats_,
+  FrameTracker tracker(config, makePoseProvider(config, loop_closer.get()), stats_,
                        frame_file.get());
-  Mapper mapper(config_, stats_, corrections.get(), keyframe_file.get());
+  Mapper mapper(config, stats_, corrections.get(), keyframe_file.get());
   if (!outputs_.mesh_path.empty()) mapper.keepMeshes();
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
-               effectiveKeyframePolicy(config_), stats_.loop_closure ? "on" : "off");
-  if (!outputs_.config_path.empty()) {
-    std::ofstream(outputs_.config_path) << config_.toYaml();
-  }
+               effectiveKeyframePolicy(config), stats_.loop_closure ? "on" : "off");
+  if (!outputs_.config_path.empty()) std::ofstream(outputs_.config_path) << config.toYaml();
 
-  FrameQueue queue(static_cast<std::size_t>(config_.queue_capacity),
-                   source_->isLive() ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
+  FrameQueue queue(static_cast<std::size_t>(config.queue_capacity),
+                   live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
-  CheckpointWriter writer([this](const CheckpointWriter::Result& r) {
-    if (r.mesh_seconds > 0.0) stats_.mesh_write_latency.record(r.mesh_seconds);
-    if (r.ok && !outputs_.mesh_path.empty()) {
-      stats_.mesh_triangles.store(r.mesh_triangles);
-      spdlog::info("mesh: {} triangles written to {} in {:.2f} s", r.mesh_triangles,
-                   outputs_.mesh_path, r.mesh_seconds);
-    }
-    if (r.ok) {
-      stats_.checkpoints_written.fetch_add(1);
-      spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
-    } else {
-      stats_.checkpoints_failed.fetch_add(1);
-      spdlog::error("checkpoint failed, mapping goes on: {}", r.error);
-    }
-  });
+  CheckpointWriter writer(reportWrites(stats_, outputs_.mesh_path));
   FirstError error;
+  const auto fail = [&error, &control](const std::string& message) {
+    error.set(message);
+    control.stop.store(true);
+  };
   const Clock::time_point start = Clock::now();
 
-  std::thread capture([&] {
-    try {
-      Frame* frame = nullptr;
-      std::uint64_t index = 0;
-      std::uint64_t index_at_outage_checkpoint = 0;
-      while (!control.stop.load()) {
-        if (!frame && !(frame = queue.acquire())) break;
-        const auto read_start = Clock::now();
-        const ReadStatus status = source_->read(*frame);
-        if (status == ReadStatus::kEnd) break;
-        if (status == ReadStatus::kSkipped) {
-          stats_.frames_skipped.store(source_->skipped());
-          continue;  // keep the slot for the next read
-        }
-        if (status == ReadStatus::kTimeout) {
-          if (!source_->canReconnect())
-            throw InputError(source_->describe() + ": camera stopped delivering frames");
-          // Keep everything mapped: checkpoint now, then wait for the same camera. A camera
-          // that reopens but delivers nothing does not rewrite an unchanged map every cycle.
-          stats_.disconnects.fetch_add(1);
-          const bool new_frames = index != index_at_outage_checkpoint;
-          if (new_frames) control.snapshot.store(true);
-          index_at_outage_checkpoint = index;
-          spdlog::warn(
-              "{}: camera stopped delivering frames; {}, waiting for it to come back (Ctrl-C "
-              "saves and quits)",
-              source_->describe(),
-              new_frames ? "map checkpointed" : "no new frame since the last checkpoint");
-          while (!control.stop.load() && !source_->reconnect()) {
-          }
-          if (!control.stop.load())
-            spdlog::info("{}: camera is back, mapping resumes", source_->describe());
-          continue;
-        }
-        stats_.read_latency.record(
-            std::chrono::duration<double>(Clock::now() - read_start).count());
-        frame->index = index++;
-        frame->captured_at = now();
-        stats_.frames_captured.fetch_add(1);
-        queue.push(frame);
-        frame = nullptr;
-        stats_.frames_dropped.store(queue.dropped());
-      }
-      // A frame still held here stays in the pool's storage; only the mapper returns frames.
-    } catch (const std::exception& e) {
-      error.set(e.what());
-      control.stop.store(true);
-    }
-    stats_.frames_skipped.store(source_->skipped());
-    queue.close();
-  });
-
+  // The threads: capture -> queue -> tracking -> fusion (-> writer), the status line here.
+  CaptureThread capture(*source_, queue, stats_, control, fail);
   // Declared before the fusion thread, which serves its map requests.
   MapPublication publication(outputs_.publisher);
-  // Keyframes go to the fusion thread; tracking never waits for fusion, except in a lossless
-  // replay, where waiting keeps the set of keyframes (and so the map) independent of timing.
-  const bool live = source_->isLive();
-  FusionThread fusion(mapper, kFusionSlots, camera.width, camera.height,
-                      [&](const std::string& message) {
-                        error.set(message);
-                        control.stop.store(true);
-                      });
+  FusionThread fusion(mapper, kFusionSlots, camera.width, camera.height, fail);
   // Checkpoints: the fusion thread takes the map snapshot and hands it to the writer, which
   // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
@@ -219,84 +184,15 @@ int Pipeline::run(RunControl& control) {
                     meshFile(outputs_, m, stats_));
     });
   };
+  // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
+  // keyframes (and so the map) independent of timing.
+  TrackingThread tracking(
+      {queue, tracker, fusion, publication, outputs_.publisher ? corrections.get() : nullptr},
+      !live, checkpointPolicy(config), checkpoint, stats_, control, fail);
 
-  std::atomic<bool> tracking_done{false};
-  std::thread tracking([&] {
-    double last_checkpoint = now();
-    std::uint64_t keyframes_at_checkpoint = 0;
-    bool finished = false;
-    while (!finished) {
-      // Frames may stop coming (camera unplugged), so wake up regularly for checkpoints.
-      if (Frame* frame = queue.pop(std::chrono::milliseconds(100), finished)) {
-        const auto track_start = Clock::now();
-        stats_.queue_latency.record(now() - frame->captured_at);
-        try {
-          bool keyframe = false;
-          if (tracker.track(*frame)) {
-            keyframe = fusion.submit(*frame, !live);
-            if (keyframe)
-              tracker.acceptKeyframe(*frame);
-            else
-              stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
-          }
-          // The viewer is shown the pose after loop closures, like the written trajectory.
-          if (corrections && outputs_.publisher)
-            frame->pose = corrections->snapshot().apply(frame->anchor, frame->pose);
-          publication.afterFrame(*frame, tracker.state(), stats_, keyframe);
-        } catch (const std::exception& e) {
-          error.set(std::string(frame->origin) + ": " + e.what());
-          control.stop.store(true);
-        }
-        queue.release(frame);
-        stats_.frames_processed.fetch_add(1);
-        stats_.track_latency.record(
-            std::chrono::duration<double>(Clock::now() - track_start).count());
-      }
-      // Also while no frame comes (a camera paused, a bag played to its end): the subscriber
-      // still gets the map with the last keyframes in it.
-      if (publication.mapDue(stats_))
-        fusion.request(MapRequest::kViewer,
-                       [&publication](const Mapper& m) { publication.publishMap(m); });
-      const std::uint64_t keyframes = tracker.keyframesAccepted();
-      const bool by_count = config_.checkpoint_every_keyframes > 0 &&
-                            keyframes - keyframes_at_checkpoint >=
-                                static_cast<std::uint64_t>(config_.checkpoint_every_keyframes) &&
-                            now() - last_checkpoint >= config_.checkpoint_min_seconds;
-      const bool by_time = config_.checkpoint_every_seconds > 0 &&
-                           now() - last_checkpoint >= config_.checkpoint_every_seconds &&
-                           keyframes > keyframes_at_checkpoint;
-      if (control.snapshot.exchange(false) || by_count || by_time) {
-        checkpoint();
-        keyframes_at_checkpoint = keyframes;
-        last_checkpoint = now();
-      }
-    }
-    // A snapshot request that came while the queue was draining is served by the final save.
-    control.snapshot.store(false);
-    tracking_done.store(true);
-  });
-
-  // Status until the tracking thread has taken every frame.
-  const bool tty = outputs_.status_line && ::isatty(STDERR_FILENO);
-  double last_print = 0;
-  bool stop_announced = false;
-  while (!tracking_done.load()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    stats_.queue_depth.store(queue.depth());
-    if (control.stop.load() && !stop_announced) {
-      stop_announced = true;
-      if (tty) std::fputc('\n', stderr);
-      spdlog::info("stopping: draining {} queued frames, then saving", queue.depth());
-    }
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-    if (outputs_.status_line && elapsed - last_print >= (tty ? 0.25 : 5.0)) {
-      last_print = elapsed;
-      if (tty)
-        std::fprintf(stderr, "\r%s\033[K", statusLine(stats_, elapsed).c_str());
-      else
-        spdlog::info("{}", statusLine(stats_, elapsed));
-    }
-  }
+  // Wait: status until the tracking thread has taken every frame, then the rest in turn.
+  StatusLine status(stats_, queue, outputs_.status_line, start);
+  status.showUntil([&tracking] { return tracking.done(); }, control.stop);
   capture.join();
   tracking.join();
   if (loop_closer) loop_closer->finish();  // every keyframe searched: final corrections
@@ -305,23 +201,10 @@ int Pipeline::run(RunControl& control) {
   stats_.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   stats_.frames_dropped.store(queue.dropped());
   stats_.queue_depth.store(0);
-  if (tty) std::fprintf(stderr, "\r%s\033[K\n", statusLine(stats_, stats_.wall_seconds).c_str());
+  status.showFinal(stats_.wall_seconds);
 
-  // Final save, through the writer so it is ordered after any checkpoint in flight.
-  const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
-  writer.submit(final_map, outputs_.map_path, trajectory_files, meshFile(outputs_, mapper, stats_));
-  publication.atEnd(final_map);
-  const CheckpointWriter::Result final_write = writer.flush();
-  int exit_code = 0;
-  if (!final_write.ok) {
-    spdlog::error("final map not saved: {}", final_write.error);
-    exit_code = 1;
-  } else {
-    spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
-  }
-  stats_.peak_rss_mb = peakRssMb();
-  stats_.mesh_memory_mb = static_cast<double>(mapper.meshMemoryBytes()) / (1024.0 * 1024.0);
-  stats_.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
+  // Finish: the final map, then the exit code.
+  int exit_code = saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, stats_);
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);

@@ -1,4 +1,4 @@
-#include "rgbdmap/mapping/frame_tracker.hpp"
+#include "rgbdmap/runtime/frame_tracker.hpp"
 
 #include <chrono>
 #include <vector>

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <thread>
+
+#include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/runtime/frame_queue.hpp"
+#include "rgbdmap/runtime/frame_tracker.hpp"
+#include "rgbdmap/runtime/fusion_thread.hpp"
+#include "rgbdmap/runtime/map_publisher.hpp"
+#include "rgbdmap/tracking/pose_corrections.hpp"
+
+namespace rgbdmap {
+
+struct RunControl;
+
+// When the tracking thread asks for a checkpoint (besides SIGUSR1 and a camera outage): after
+// `every_keyframes` new keyframes but no sooner than `min_seconds` after the previous one, or
+// every `every_seconds` while keyframes come (each 0 = off).
+struct CheckpointPolicy {
+  int every_keyframes = 0;
+  double min_seconds = 0;
+  double every_seconds = 0;
+};
+
+// Takes every frame from the queue on its own thread: gives it its pose (FrameTracker), hands
+// keyframes to the fusion thread, shows the viewer the frame and, when due, the map, and asks
+// the fusion thread for checkpoints. Runs until the queue is closed and drained.
+class TrackingThread {
+ public:
+  using ErrorHandler = std::function<void(const std::string&)>;
+  using Checkpoint = std::function<void()>;
+
+  struct Parts {
+    FrameQueue& queue;
+    FrameTracker& tracker;
+    FusionThread& fusion;
+    MapPublication& publication;
+    // Moves the poses the viewer is shown by the loop closures (null: shown as tracked).
+    const PoseCorrections* viewer_corrections;
+  };
+
+  // Starts the thread. `wait_for_fusion`: a keyframe waits for a fusion slot (a lossless replay,
+  // whose map must not depend on timing) instead of being deferred to the next frame (live).
+  // `checkpoint` asks for one; `on_error` is told of a frame that failed (the thread goes on).
+  TrackingThread(Parts parts, bool wait_for_fusion, CheckpointPolicy policy, Checkpoint checkpoint,
+                 RunStats& stats, RunControl& control, ErrorHandler on_error);
+  ~TrackingThread();  // stops the run if still going, then join()
+
+  // Set once every frame is taken and the last checkpoint request made.
+  bool done() const { return done_.load(); }
+  void join();
+
+ private:
+  void run();
+  void track(Frame& frame);
+  bool checkpointDue(std::uint64_t keyframes) const;
+
+  Parts parts_;
+  bool wait_for_fusion_;
+  CheckpointPolicy policy_;
+  Checkpoint checkpoint_;
+  RunStats& stats_;
+  RunControl& control_;
+  ErrorHandler on_error_;
+  double last_checkpoint_;  // steady-clock seconds
+  std::uint64_t keyframes_at_checkpoint_ = 0;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,106 @@
+#include "rgbdmap/runtime/tracking_thread.hpp"
+
+#include <chrono>
+#include <exception>
+
+#include "rgbdmap/runtime/pipeline.hpp"
+
+namespace rgbdmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The clock of Frame::captured_at, set by the capture thread.
+double steadySeconds() {
+  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+TrackingThread::TrackingThread(Parts parts, bool wait_for_fusion, CheckpointPolicy policy,
+                               Checkpoint checkpoint, RunStats& stats, RunControl& control,
+                               ErrorHandler on_error)
+    : parts_(parts),
+      wait_for_fusion_(wait_for_fusion),
+      policy_(policy),
+      checkpoint_(std::move(checkpoint)),
+      stats_(stats),
+      control_(control),
+      on_error_(std::move(on_error)),
+      last_checkpoint_(steadySeconds()),
+      thread_([this] { run(); }) {}
+
+TrackingThread::~TrackingThread() {
+  // Still running only when the run is left by an exception: stop it rather than wait for the
+  // source to end.
+  if (thread_.joinable()) control_.stop.store(true);
+  join();
+}
+
+void TrackingThread::join() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void TrackingThread::run() {
+  bool finished = false;
+  while (!finished) {
+    // Frames may stop coming (camera unplugged), so wake up regularly for checkpoints.
+    if (Frame* frame = parts_.queue.pop(std::chrono::milliseconds(100), finished)) {
+      const auto track_start = Clock::now();
+      stats_.queue_latency.record(steadySeconds() - frame->captured_at);
+      track(*frame);
+      parts_.queue.release(frame);
+      stats_.frames_processed.fetch_add(1);
+      stats_.track_latency.record(
+          std::chrono::duration<double>(Clock::now() - track_start).count());
+    }
+    // Also while no frame comes (a camera paused, a bag played to its end): the subscriber
+    // still gets the map with the last keyframes in it.
+    if (parts_.publication.mapDue(stats_)) {
+      MapPublication& publication = parts_.publication;
+      parts_.fusion.request(MapRequest::kViewer,
+                            [&publication](const Mapper& m) { publication.publishMap(m); });
+    }
+    const std::uint64_t keyframes = parts_.tracker.keyframesAccepted();
+    if (control_.snapshot.exchange(false) || checkpointDue(keyframes)) {
+      checkpoint_();
+      keyframes_at_checkpoint_ = keyframes;
+      last_checkpoint_ = steadySeconds();
+    }
+  }
+  // A snapshot request that came while the queue was draining is served by the final save.
+  control_.snapshot.store(false);
+  done_.store(true);
+}
+
+void TrackingThread::track(Frame& frame) {
+  try {
+    bool keyframe = false;
+    if (parts_.tracker.track(frame)) {
+      keyframe = parts_.fusion.submit(frame, wait_for_fusion_);
+      if (keyframe)
+        parts_.tracker.acceptKeyframe(frame);
+      else
+        stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
+    }
+    // The viewer is shown the pose after loop closures, like the written trajectory.
+    if (parts_.viewer_corrections)
+      frame.pose = parts_.viewer_corrections->snapshot().apply(frame.anchor, frame.pose);
+    parts_.publication.afterFrame(frame, parts_.tracker.state(), stats_, keyframe);
+  } catch (const std::exception& e) {
+    if (on_error_) on_error_(std::string(frame.origin) + ": " + e.what());
+  }
+}
+
+bool TrackingThread::checkpointDue(std::uint64_t keyframes) const {
+  const bool by_count =
+      policy_.every_keyframes > 0 &&
+      keyframes - keyframes_at_checkpoint_ >= static_cast<std::uint64_t>(policy_.every_keyframes) &&
+      steadySeconds() - last_checkpoint_ >= policy_.min_seconds;
+  const bool by_time = policy_.every_seconds > 0 &&
+                       steadySeconds() - last_checkpoint_ >= policy_.every_seconds &&
+                       keyframes > keyframes_at_checkpoint_;
+  return by_count || by_time;
+}
+
+}  // namespace rgbdmap
