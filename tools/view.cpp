@@ -1,10 +1,10 @@
 // `rgbdmap view MAP.pcd`, and the live viewer of a mapping run.
 #include <spdlog/spdlog.h>
-#include <sys/stat.h>
 
 #include <filesystem>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
@@ -13,11 +13,6 @@
 
 namespace rgbdmap {
 namespace {
-
-bool exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
 
 std::string stem(const std::string& path) {
   const auto slash = path.find_last_of('/');
@@ -34,7 +29,7 @@ std::vector<TrajectoryPoint> savedTrajectory(const std::string& map_path,
   Trajectory keyframes, frames;
   for (auto [path, trajectory] : {std::pair{stem(map_path) + "_keyframes.txt", &keyframes},
                                   std::pair{stem(map_path) + "_trajectory.txt", &frames}}) {
-    if (!exists(path)) continue;
+    if (!pathExists(path)) continue;
     *trajectory = Trajectory::load(path);  // InputError names the file and line
     spdlog::info("view: {} poses from {}", trajectory->size(), path);
   }
@@ -83,7 +78,7 @@ void addViewCommand(CLI::App& app, Command& selected) {
                          "); `rgbdmap render` draws a map to a PNG without one");
       // A PLY with faces (--mesh) is shown as a mesh; anything else as points.
       std::shared_ptr<TriangleMesh> mesh;
-      if (map->size() > 4 && map->compare(map->size() - 4, 4, ".ply") == 0) {
+      if (endsWith(*map, ".ply")) {
         try {
           mesh = std::make_shared<TriangleMesh>(readPly(*map));
         } catch (const InputError&) {
