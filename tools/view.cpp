@@ -1,10 +1,10 @@
 // `rgbdmap view MAP.pcd`, and the live viewer of a mapping run.
 #include <spdlog/spdlog.h>
-#include <sys/stat.h>
 
 #include <filesystem>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
@@ -15,11 +15,6 @@
 namespace rgbdmap {
 namespace {
 
-bool exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
-
 // The camera's path: the per-frame trajectory (MAP_trajectory.txt) when there is one, else the
 // keyframes (MAP_keyframes.txt); keyframes are marked.
 std::vector<TrajectoryPoint> savedTrajectory(const std::string& map_path,
@@ -28,7 +23,7 @@ std::vector<TrajectoryPoint> savedTrajectory(const std::string& map_path,
   const PipelineOutputs beside = outputsBeside(map_path);
   for (auto [path, trajectory] : {std::pair{beside.trajectory_path, &keyframes},
                                   std::pair{beside.frame_trajectory_path, &frames}}) {
-    if (!exists(path)) continue;
+    if (!pathExists(path)) continue;
     *trajectory = Trajectory::load(path);  // InputError names the file and line
     spdlog::info("view: {} poses from {}", trajectory->size(), path);
   }
@@ -77,7 +72,7 @@ void addViewCommand(CLI::App& app, Command& selected) {
                          "); `rgbdmap render` draws a map to a PNG without one");
       // A PLY with faces (--mesh) is shown as a mesh; anything else as points.
       std::shared_ptr<TriangleMesh> mesh;
-      if (map->size() > 4 && map->compare(map->size() - 4, 4, ".ply") == 0) {
+      if (endsWith(*map, ".ply")) {
         try {
           mesh = std::make_shared<TriangleMesh>(readPly(*map));
         } catch (const InputError&) {

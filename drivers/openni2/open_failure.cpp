@@ -1,18 +1,13 @@
 #include "open_failure.hpp"
 
 #include <OpenNI.h>
-#include <sys/stat.h>
 
+#include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/drivers/usb_cameras.hpp"
 #include "runtime.hpp"
 
 namespace rgbdmap::openni2 {
 namespace {
-
-bool endsWith(const std::string& text, const std::string& suffix) {
-  return text.size() >= suffix.size() &&
-         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // The reason `rgbdmap --source openni2` found nothing, from what the USB bus
 // shows.
@@ -51,8 +46,7 @@ std::string noCameraMessage(const std::string& openni_error) {
 std::string openFailure(const std::string& uri, bool diagnose) {
   const std::string error = lastError();
   if (endsWith(uri, ".oni")) {
-    struct stat st {};
-    if (::stat(uri.c_str(), &st) != 0) return "openni2:" + uri + ": no such recording file";
+    if (!pathExists(uri)) return "openni2:" + uri + ": no such recording file";
     return "openni2:" + uri + ": OpenNI2 cannot play this file as a recording (" +
            (error == "no details" ? std::string("corrupt or truncated?") : error) + ")";
   }

@@ -3,11 +3,11 @@
 #include <rosbag/exceptions.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <spdlog/spdlog.h>
-#include <sys/stat.h>
 
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/ros/image_messages.hpp"
 
@@ -27,9 +27,8 @@ std::string presetForBag(const std::string& path) {
 
 RosbagSource::RosbagSource(const std::string& path, const Config& config)
     : path_(path), camera_(config.camera), rate_(config.rate) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw InputError(path + ": no such file");
-  if (!S_ISREG(st.st_mode)) throw InputError(path + ": not a file (expected a ROS bag)");
+  if (!pathExists(path)) throw InputError(path + ": no such file");
+  if (!isFile(path)) throw InputError(path + ": not a file (expected a ROS bag)");
   try {
     bag_.open(path, rosbag::bagmode::Read);
     std::vector<std::pair<std::string, std::string>> topics;

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <iomanip>
 #include <stdexcept>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/text_lines.hpp"
+#include "rgbdmap/base/tum_pose_line.hpp"
 
 namespace rgbdmap {
 
@@ -46,14 +46,8 @@ void Trajectory::save(const std::string& path) const {
   {
     std::ofstream out(tmp);
     if (!out) throw std::runtime_error(tmp + ": cannot open for writing");
-    out << "# timestamp tx ty tz qx qy qz qw\n" << std::fixed;
-    for (const StampedPose& p : poses_) {
-      const Eigen::Quaterniond q = Eigen::Quaterniond(p.pose.linear()).normalized();
-      const Eigen::Vector3d t = p.pose.translation();
-      out << std::setprecision(6) << p.timestamp << std::setprecision(7) << ' ' << t.x() << ' '
-          << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w()
-          << '\n';
-    }
+    out << kTumPoseHeader;
+    for (const StampedPose& p : poses_) out << tumPoseLine(p.timestamp, p.pose) << '\n';
     out.flush();
     if (!out) throw std::runtime_error(tmp + ": write failed");
   }

@@ -1,12 +1,11 @@
 #include "rgbdmap/capture/tum_sequence.hpp"
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/base/opencv_codecs.hpp"
 #include "rgbdmap/base/text_lines.hpp"
 #include "rgbdmap/capture/association.hpp"
@@ -19,16 +18,6 @@ struct ListEntry {
   std::string path;
   std::size_t line;
 };
-
-bool isDirectory(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-bool isFile(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
-}
 
 std::vector<ListEntry> readList(const std::string& folder, const std::string& name) {
   const std::string path = folder + "/" + name;

@@ -5,32 +5,16 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/kdtree/kdtree_flann.h>
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_names.hpp"
 
 namespace rgbdmap {
 namespace {
-
-bool isFile(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
-}
-
-bool isDirectory(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-bool endsWith(const std::string& text, const std::string& suffix) {
-  return text.size() >= suffix.size() &&
-         std::equal(suffix.rbegin(), suffix.rend(), text.rbegin(),
-                    [](char a, char b) { return std::tolower(a) == std::tolower(b); });
-}
 
 // Reads a PCD or PLY file generically (PCL's typed loaders misbehave on empty clouds) and
 // checks it has coordinates.
@@ -41,9 +25,9 @@ pcl::PCLPointCloud2 loadCloudBlob(const std::string& path, const char* what) {
   // PCL's readers throw on some malformed headers (a number that is not one): a bad file, not
   // a crash (found by fuzz/fuzz_map_file).
   try {
-    if (endsWith(path, ".ply")) {
+    if (endsWithIgnoringCase(path, ".ply")) {
       result = pcl::io::loadPLYFile(path, blob);
-    } else if (endsWith(path, ".pcd")) {
+    } else if (endsWithIgnoringCase(path, ".pcd")) {
       // PCL 1.13's reader crashes on a file whose header declares no fields, so the header is
       // checked first; a header with no points is an empty cloud.
       pcl::PCDReader reader;
@@ -168,7 +152,7 @@ pcl::PointCloud<pcl::PointXYZRGB> loadMapFile(const std::string& path) {
 
 SyntheticGroundTruth loadSyntheticGroundTruth(const std::string& folder_or_scene) {
   std::string folder = folder_or_scene;
-  if (isFile(folder) && endsWith(folder, ".yaml")) {
+  if (isFile(folder) && endsWithIgnoringCase(folder, ".yaml")) {
     const auto slash = folder.find_last_of('/');
     folder = slash == std::string::npos ? "." : folder.substr(0, slash);
   }

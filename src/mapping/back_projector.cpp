@@ -1,6 +1,6 @@
 #include "rgbdmap/mapping/back_projector.hpp"
 
-#include <opencv2/calib3d.hpp>
+#include "rgbdmap/capture/lens_undistortion.hpp"
 
 namespace rgbdmap {
 
@@ -12,7 +12,7 @@ BackProjector::BackProjector(const CameraIntrinsics& camera, bool undistort)
     for (int v = 0; v < height_; ++v)
       for (int u = 0; u < width_; ++u)
         pixels.emplace_back(static_cast<float>(u), static_cast<float>(v));
-    cv::undistortPoints(pixels, normalized, camera.cameraMatrix(), camera.distortion());
+    LensUndistortion::rays(camera, pixels, normalized);
     for (std::size_t i = 0; i < rays_.size(); ++i) rays_[i] = {normalized[i].x, normalized[i].y};
   } else {
     for (int v = 0; v < height_; ++v)

@@ -4,13 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/imgproc.hpp>
 
 namespace rgbdmap {
 namespace {
-
-constexpr std::size_t kUndistortPixelsPerTask = 640 * 60;  // pixels per task: rows of VGA
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -52,42 +48,8 @@ KeyframeIntegrator::KeyframeIntegrator(const Config& config, int threads)
       statistical_(config.outlier_filter == "statistical"),
       sor_mean_k_(config.sor_mean_k),
       sor_stddev_(config.sor_stddev),
-      undistort_(config.undistort && config.camera.hasDistortion()),
       projector_(config.camera, config.undistort) {
-  if (undistort_) {
-    // One table for depth and colour: the nearest distorted pixel of each pinhole pixel.
-    const cv::Size size(config.camera.width, config.camera.height);
-    cv::Mat x, y;
-    cv::initUndistortRectifyMap(config.camera.cameraMatrix(), config.camera.distortion(),
-                                cv::Matx33d::eye(), config.camera.cameraMatrix(), size, CV_32FC1, x,
-                                y);
-    distorted_pixel_of_.resize(static_cast<std::size_t>(size.area()));
-    for (int v = 0; v < size.height; ++v) {
-      for (int u = 0; u < size.width; ++u) {
-        const int su = cvRound(x.at<float>(v, u)), sv = cvRound(y.at<float>(v, u));
-        const bool inside = su >= 0 && sv >= 0 && su < size.width && sv < size.height;
-        distorted_pixel_of_[static_cast<std::size_t>(v) * size.width + u] =
-            inside ? sv * size.width + su : -1;
-      }
-    }
-  }
-}
-
-// Depth through the table, nearest neighbour (interpolating across an edge would invent
-// surfaces), in bands of rows on the pool.
-void KeyframeIntegrator::undistortDepth() {
-  pinhole_depth_.create(depth_.size(), CV_32FC1);
-  const float* in = depth_.ptr<float>();
-  float* out = pinhole_depth_.ptr<float>();
-  const std::size_t pixels = depth_.total();
-  const std::size_t tasks = (pixels + kUndistortPixelsPerTask - 1) / kUndistortPixelsPerTask;
-  runTasks(&pool_, tasks, [&](std::size_t task) {
-    const std::size_t last = std::min(pixels, (task + 1) * kUndistortPixelsPerTask);
-    for (std::size_t i = task * kUndistortPixelsPerTask; i < last; ++i) {
-      const int from = distorted_pixel_of_[i];
-      out[i] = from >= 0 ? in[from] : 0.0f;
-    }
-  });
+  if (config.undistort && config.camera.hasDistortion()) lens_.emplace(config.camera);
 }
 
 void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {
@@ -101,10 +63,10 @@ void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& 
   const cv::Mat* depth = &depth_;
   const int* color_pixel_of = nullptr;
   // Colour is read through the table where fusion needs it (near surfaces), not remapped whole.
-  if (undistort_) {
-    undistortDepth();
+  if (lens_) {
+    lens_->resampleDepth(depth_, pinhole_depth_, &pool_);
     depth = &pinhole_depth_;
-    color_pixel_of = distorted_pixel_of_.data();
+    color_pixel_of = lens_->nearestRawPixel().data();
   }
   stats.project_latency.record(secondsSince(project_start));
 

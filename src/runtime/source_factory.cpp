@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/capture/tum_source.hpp"
 #include "rgbdmap/drivers/openni2_source.hpp"
 
@@ -48,8 +49,7 @@ std::string presetForSource(const std::string& spec) {
   }
   if (spec == "openni2" || spec.rfind("openni2:", 0) == 0) {
     const std::string uri = spec == "openni2" ? "" : spec.substr(8);
-    const bool recording = uri.size() >= 4 && uri.compare(uri.size() - 4, 4, ".oni") == 0;
-    if (recording) return "kinect_v1";
+    if (endsWith(uri, ".oni")) return "kinect_v1";  // a recording
     const std::string model = openNI2CameraModel(uri);
     return model.empty() ? "kinect_v1" : model;
   }

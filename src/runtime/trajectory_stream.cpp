@@ -9,25 +9,18 @@
 #include <fstream>
 #include <sstream>
 
+#include "rgbdmap/base/tum_pose_line.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 
 namespace rgbdmap {
 namespace {
 
-constexpr char kHeader[] = "# timestamp tx ty tz qx qy qz qw\n";
-
-// One TUM line, as Trajectory::save writes it; with the anchor appended for the spool.
+// One TUM line, with the anchor appended for the spool.
 void formatLine(std::string& out, double timestamp, const Eigen::Isometry3d& pose,
                 const std::int64_t* anchor) {
-  const Eigen::Quaterniond q = Eigen::Quaterniond(pose.linear()).normalized();
-  const Eigen::Vector3d t = pose.translation();
-  char line[256];
-  int n = std::snprintf(line, sizeof line, "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f", timestamp,
-                        t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
-  if (anchor)
-    n += std::snprintf(line + n, sizeof line - n, " %lld", static_cast<long long>(*anchor));
-  out.append(line, static_cast<std::size_t>(n));
+  out += tumPoseLine(timestamp, pose);
+  if (anchor) out += ' ' + std::to_string(*anchor);
   out.push_back('\n');
 }
 
@@ -53,7 +46,7 @@ void TrajectoryStream::record(double timestamp, const Eigen::Isometry3d& pose,
 bool TrajectoryStream::append(const std::string& file, const std::vector<Entry>& entries,
                               bool with_anchor, bool truncate, std::string& error) {
   std::string text;
-  if (truncate && !with_anchor) text = kHeader;
+  if (truncate && !with_anchor) text = kTumPoseHeader;
   for (const Entry& e : entries)
     formatLine(text, e.timestamp, e.pose, with_anchor ? &e.anchor : nullptr);
   const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (truncate ? O_TRUNC : O_APPEND);
@@ -79,7 +72,7 @@ bool TrajectoryStream::rewriteFromSpool(std::string& error) {
       path_,
       [&](int fd) {
         // In pieces: the spool of a long run is large and only the file should hold it whole.
-        std::string text = kHeader;
+        std::string text = kTumPoseHeader;
         std::string line;
         while (std::getline(in, line)) {
           std::istringstream fields(line);

@@ -16,6 +16,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
+#include "rgbdmap/base/tum_pose_line.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -278,16 +279,11 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
 
   std::ofstream groundtruth(folder + "/groundtruth.txt");
   groundtruth << "# ground truth trajectory (rgbdmap synth, analytic path sampled at "
-              << options.groundtruth_rate << " Hz)\n# timestamp tx ty tz qx qy qz qw\n";
+              << options.groundtruth_rate << " Hz)\n"
+              << kTumPoseHeader;
   for (int k = -gt_margin; k <= gt_samples + gt_margin; ++k) {
     const double t = k / options.groundtruth_rate;
-    const Eigen::Isometry3d pose = path.pose(t);
-    const Eigen::Quaterniond q(pose.linear());
-    const Eigen::Vector3d p = pose.translation();
-    char line[256];
-    std::snprintf(line, sizeof(line), "%.6f %.7f %.7f %.7f %.9f %.9f %.9f %.9f\n",
-                  options.start_time + t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
-    groundtruth << line;
+    groundtruth << tumPoseLine(options.start_time + t, path.pose(t), 9) << '\n';
   }
   groundtruth.flush();
   if (!groundtruth) throw InputError(folder + "/groundtruth.txt: cannot write");

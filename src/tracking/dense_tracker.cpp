@@ -103,14 +103,12 @@ bool DenseTracker::accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingS
   return true;
 }
 
-bool DenseTracker::lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why) {
-  loss_reason_ = why;
+bool DenseTracker::lose(Frame& frame, const Eigen::Isometry3d& predicted) {
   frame.anchor = keyframe_ ? static_cast<std::int64_t>(keyframe_->id) : -1;
   frame.pose = predicted;
   frame.has_pose = false;
   state_ = TrackingState::kLost;
   lost_ = true;
-  ++lost_frames_;
   return false;
 }
 
@@ -122,7 +120,7 @@ bool DenseTracker::estimate(Frame& frame) {
   if (!started_) {
     last_timestamp_ = frame.timestamp;
     // Nothing to track against yet: the first frame with depth starts the world frame.
-    if (!enough_depth) return lose(frame, Eigen::Isometry3d::Identity(), "no depth");
+    if (!enough_depth) return lose(frame, Eigen::Isometry3d::Identity());
     started_ = true;
     makeKeyframe(frame, Eigen::Isometry3d::Identity(), nullptr, AlignmentResult{});
     velocity_.setIdentity();
@@ -138,25 +136,24 @@ bool DenseTracker::estimate(Frame& frame) {
 
   if (lost_) {
     Eigen::Isometry3d pose;
-    if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_, "lost");
+    if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_);
     velocity_.setIdentity();
-    ++relocalisations_;
     return accept(frame, pose, TrackingState::kRelocalised);
   }
 
   last_result_ =
       aligner_.align(keyframe_->reference, pyramid_, rigid(predicted.inverse() * keyframe_->pose));
   const Eigen::Isometry3d pose = rigid(keyframe_->pose * last_result_.motion.inverse());
-  if (const char* why = reject(last_result_, pose, predicted, periods, true)) {
+  if (reject(last_result_, pose, predicted, periods, true)) {
     velocity_.setIdentity();
-    return lose(frame, predicted, why);
+    return lose(frame, predicted);
   }
   velocity_ = scaled(last_pose_.inverse() * pose, 1.0 / periods);
   if (!enough_depth) {
     // The image tracks but the frame has (almost) no depth: nothing to map. Its pose is good, so
     // tracking goes on from it, but the next good frame reports the recovery.
     last_pose_ = pose;
-    return lose(frame, pose, "no depth");
+    return lose(frame, pose);
   }
   accept(frame, pose, TrackingState::kTracked);
   const Eigen::Isometry3d from_keyframe = keyframe_->pose.inverse() * pose;

@@ -1,7 +1,6 @@
 #include "rgbdmap/tracking/image_pyramid.hpp"
 
 #include <cmath>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace rgbdmap {
@@ -93,17 +92,13 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
   base.camera = at_first;
   if (undistort && camera.hasDistortion()) {
     const cv::Size size(at_first.width, at_first.height);
-    if (map_for_ != size) {
+    if (!lens_ || lens_->size() != size) {
       const cv::Matx33d K(at_first.fx, 0, at_first.cx, 0, at_first.fy, at_first.cy, 0, 0, 1);
-      cv::initUndistortRectifyMap(camera.cameraMatrix(), camera.distortion(), cv::noArray(), K,
-                                  size, CV_32FC1, map_x_, map_y_);
-      map_for_ = size;
+      lens_.emplace(camera, K, size);
     }
-    cv::remap(gray8_, raw_, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    lens_->resampleImage(gray8_, raw_);
     raw_.convertTo(base.gray, CV_32F);
-    // Depth is not interpolated across the image: nearest sample, or a missing one.
-    cv::remap(frame.depth, base.depth, map_x_, map_y_, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
-              cv::Scalar(0));
+    lens_->resampleDepth(frame.depth, base.depth);
   } else {
     PyramidLevel& level0 = levels_[0];
     level0.camera = full;

@@ -4,6 +4,8 @@
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "rgbdmap/capture/lens_undistortion.hpp"
+
 namespace rgbdmap {
 
 Relocaliser::Relocaliser(const CameraIntrinsics& camera, int min_inliers, float min_depth,
@@ -49,7 +51,7 @@ void Relocaliser::attachPoints(const std::vector<cv::KeyPoint>& keypoints,
   if (!pixels.empty()) {
     // Rays through the undistorted pixel positions (the lens distorts the image, not depth).
     std::vector<cv::Point2f> rays;
-    cv::undistortPoints(pixels, rays, camera_.cameraMatrix(), camera_.distortion());
+    LensUndistortion::rays(camera_, pixels, rays);
     for (std::size_t i = 0; i < rays.size(); ++i) {
       const float z = depth.at<float>(cvRound(pixels[i].y), cvRound(pixels[i].x));
       view.points.emplace_back(rays[i].x * z, rays[i].y * z, z);

@@ -1,11 +1,13 @@
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
+#include "rgbdmap/capture/lens_undistortion.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
 #include "rgbdmap/mapping/depth_smoother.hpp"
@@ -27,7 +29,6 @@ class KeyframeIntegrator {
 
  private:
   void removeStatisticalOutliers(const Frame& frame);
-  void undistortDepth();  // depth_ into pinhole_depth_
 
   DepthFilter filter_;
   DepthSmoother smoother_;
@@ -36,8 +37,7 @@ class KeyframeIntegrator {
   bool statistical_ = false;
   int sor_mean_k_ = 50;
   double sor_stddev_ = 1.0;
-  bool undistort_ = false;
-  std::vector<int> distorted_pixel_of_;  // for each pinhole pixel, the pixel that saw it or -1
+  std::optional<LensUndistortion> lens_;  // when the lens distorts and filter.undistort is set
   cv::Mat depth_, scratch_, pinhole_depth_;
   DepthSmoother::Buffers smoothing_;
   BackProjector projector_;  // for the statistical filter

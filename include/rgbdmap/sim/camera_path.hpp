@@ -47,7 +47,6 @@ class WalkPath : public CameraPath {
  public:
   WalkPath(const ScenePrimitive& room, std::uint64_t seed, double loop_seconds, double inset);
   Eigen::Isometry3d pose(double t) const override;
-  double lapLength() const { return lap_length_; }
 
  private:
   // Position and heading (rad) at arc length s along the lap.

@@ -32,11 +32,7 @@ class DenseTracker : public PoseProvider {
   std::string describe() const override;
   TrackingState state() const override { return state_; }
 
-  std::uint64_t lostFrames() const { return lost_frames_; }
-  std::uint64_t relocalisations() const { return relocalisations_; }
   std::uint64_t keyframes() const { return keyframes_made_; }
-  // Why the last lost frame was lost (e.g. "residual too large"), for logs and status lines.
-  const char* lossReason() const { return loss_reason_; }
 
  private:
   struct Keyframe {
@@ -53,7 +49,7 @@ class DenseTracker : public PoseProvider {
                     const AlignmentResult& alignment);
   bool relocalise(const Frame& frame, Eigen::Isometry3d& pose);
   bool accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state);
-  bool lose(Frame& frame, const Eigen::Isometry3d& predicted, const char* why);
+  bool lose(Frame& frame, const Eigen::Isometry3d& predicted);
 
   CameraIntrinsics camera_;
   TrackingOptions options_;
@@ -71,9 +67,8 @@ class DenseTracker : public PoseProvider {
   double frame_period_ = 1.0 / 30.0;
   bool started_ = false;
   bool lost_ = false;
-  const char* loss_reason_ = "";
   TrackingState state_ = TrackingState::kNoPose;
-  std::uint64_t lost_frames_ = 0, relocalisations_ = 0, keyframes_made_ = 0;
+  std::uint64_t keyframes_made_ = 0;
 };
 
 }  // namespace rgbdmap

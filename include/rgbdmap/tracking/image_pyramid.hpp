@@ -2,9 +2,11 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/capture/lens_undistortion.hpp"
 
 namespace rgbdmap {
 
@@ -47,8 +49,8 @@ class ImagePyramid {
  private:
   std::vector<PyramidLevel> levels_;
   double depth_fraction_ = 0.0;
-  cv::Mat gray8_, map_x_, map_y_, raw_;  // reused buffers; the undistortion maps
-  cv::Size map_for_;
+  cv::Mat gray8_, raw_;                   // reused buffers
+  std::optional<LensUndistortion> lens_;  // to the pinhole camera of level `first`
 };
 
 }  // namespace rgbdmap

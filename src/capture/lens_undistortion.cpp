@@ -1,0 +1,60 @@
+#include "rgbdmap/capture/lens_undistortion.hpp"
+
+#include <algorithm>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace rgbdmap {
+namespace {
+
+constexpr std::size_t kPixelsPerTask = 640 * 60;  // depth resampled per task: rows of VGA
+
+}  // namespace
+
+LensUndistortion::LensUndistortion(const CameraIntrinsics& lens, const cv::Matx33d& pinhole,
+                                   cv::Size size)
+    : raw_size_(lens.width, lens.height), size_(size) {
+  cv::initUndistortRectifyMap(lens.cameraMatrix(), lens.distortion(), cv::noArray(), pinhole, size,
+                              CV_32FC1, map_x_, map_y_);
+  // Rounded as cv::remap rounds for its nearest-neighbour lookup, against the raw image (the
+  // camera's size).
+  nearest_raw_pixel_.resize(static_cast<std::size_t>(size.area()));
+  for (int v = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u) {
+      const int su = cvRound(map_x_.at<float>(v, u)), sv = cvRound(map_y_.at<float>(v, u));
+      const bool inside = su >= 0 && sv >= 0 && su < lens.width && sv < lens.height;
+      nearest_raw_pixel_[static_cast<std::size_t>(v) * size.width + u] =
+          inside ? sv * lens.width + su : -1;
+    }
+  }
+}
+
+LensUndistortion::LensUndistortion(const CameraIntrinsics& lens)
+    : LensUndistortion(lens, lens.cameraMatrix(), cv::Size(lens.width, lens.height)) {}
+
+void LensUndistortion::resampleImage(const cv::Mat& raw, cv::Mat& pinhole) const {
+  cv::remap(raw, pinhole, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+}
+
+void LensUndistortion::resampleDepth(const cv::Mat& raw, cv::Mat& pinhole, WorkerPool* pool) const {
+  CV_Assert(raw.type() == CV_32FC1 && raw.isContinuous() && raw.size() == raw_size_);
+  pinhole.create(size_, CV_32FC1);
+  const float* in = raw.ptr<float>();
+  float* out = pinhole.ptr<float>();
+  const std::size_t pixels = nearest_raw_pixel_.size();
+  const std::size_t tasks = (pixels + kPixelsPerTask - 1) / kPixelsPerTask;
+  runTasks(pool, tasks, [&](std::size_t task) {
+    const std::size_t last = std::min(pixels, (task + 1) * kPixelsPerTask);
+    for (std::size_t i = task * kPixelsPerTask; i < last; ++i) {
+      const int from = nearest_raw_pixel_[i];
+      out[i] = from >= 0 ? in[from] : 0.0f;
+    }
+  });
+}
+
+void LensUndistortion::rays(const CameraIntrinsics& lens, const std::vector<cv::Point2f>& pixels,
+                            std::vector<cv::Point2f>& rays) {
+  cv::undistortPoints(pixels, rays, lens.cameraMatrix(), lens.distortion());
+}
+
+}  // namespace rgbdmap
