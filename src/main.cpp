@@ -11,8 +11,8 @@
 #include <mutex>
 #include <thread>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
@@ -137,23 +137,6 @@ struct MapOptions {
   bool markdown = false;
 };
 
-// Every config key as a Markdown table: docs/configuration.md is this output, so the reference
-// cannot drift from the code (a test compares them).
-std::string configurationTable(rgbdmap::Config& config) {
-  auto escape = [](std::string text) {
-    for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2))
-      text.replace(at, 1, "\\|");
-    return text;
-  };
-  std::string table = "| key | default | meaning |\n| --- | --- | --- |\n";
-  for (const rgbdmap::Config::Key& k : config.keys()) {
-    const std::string value = k.get();
-    table += "| `" + k.name + "` | " + (value.empty() ? "" : "`" + escape(value) + "`") + " | " +
-             escape(k.help) + " |\n";
-  }
-  return table;
-}
-
 // The map's folder is created if missing and must be writable: better to refuse at once than to
 // find out at the first checkpoint, after mapping for a while.
 void checkOutputFolder(const std::string& map_path, const std::string& option = "--out") {
@@ -180,12 +163,8 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
-    if (o.markdown) {
-      std::printf("%s", configurationTable(config).c_str());
-      return 0;
-    }
-    for (const Config::Key& k : config.keys())
-      std::printf("%-28s %-12s %s\n", k.name.c_str(), k.get().c_str(), k.help.c_str());
+    // --markdown: docs/configuration.md's table, so the reference cannot drift from the code.
+    std::printf("%s", listKeys(config.keys(), o.markdown).c_str());
     return 0;
   }
   if (o.source.empty()) {
@@ -205,9 +184,9 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, SignalThread& 
   if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (stoppedDuringStartUp(control)) return 0;
-  if (config.pose_source == "auto")
-    config.pose_source = source->providesPoses() ? "groundtruth" : "odometry";
-  if (config.pose_source == "groundtruth" && !source->providesPoses())
+  if (config.pose.source == "auto")
+    config.pose.source = source->providesPoses() ? "groundtruth" : "odometry";
+  if (config.pose.source == "groundtruth" && !source->providesPoses())
     throw InputError(
         source->describe() +
         ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");

@@ -12,9 +12,9 @@
 #include <fstream>
 #include <thread>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/fakenect_dump.hpp"

@@ -13,11 +13,11 @@
 #include <fstream>
 #include <thread>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
 #include "rgbdmap/ros/topic_source.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 
 namespace {
@@ -152,8 +152,8 @@ int runNode(RunControl& control, SignalThread& signals) {
     topics.shutdown();
     return 0;
   }
-  if (config.pose_source == "auto") config.pose_source = "odometry";
-  if (config.pose_source == "groundtruth")
+  if (config.pose.source == "auto") config.pose.source = "odometry";
+  if (config.pose.source == "groundtruth")
     throw InputError(
         "pose.source=groundtruth: a ROS camera has no ground truth; use odometry "
         "or trajectory");

@@ -95,18 +95,20 @@ Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineO
 
 int Pipeline::run(RunControl& control) {
   const CameraIntrinsics camera = source_->intrinsics();
-  config_.camera = camera;
+  static_cast<CameraIntrinsics&>(config_.camera) = camera;
   // A live camera leaves the other cores to tracking; a replay is limited by fusion alone.
-  if (config_.map_fusion_threads == 0)
-    config_.map_fusion_threads = source_->isLive() ? 1 : WorkerPool::resolve(0);
+  if (config_.map.fusion_threads == 0)
+    config_.map.fusion_threads = source_->isLive() ? 1 : WorkerPool::resolve(0);
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
   // move the trajectories and the map's submaps.
-  stats_.loop_closure = config_.loop.enabled && tracksKeyframes(config_);
+  stats_.loop_closure = config_.loop.enabled && tracksKeyframes(config_.pose, config_.tracking);
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
   if (stats_.loop_closure) {
     corrections = std::make_unique<PoseCorrections>();
-    loop_closer = std::make_unique<LoopCloser>(config_, *corrections, stats_, !source_->isLive());
+    loop_closer = std::make_unique<LoopCloser>(config_.camera, config_.tracking, config_.loop,
+                                               config_.filter.min_depth, config_.filter.max_depth,
+                                               *corrections, stats_, !source_->isLive());
   }
   // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
   // frame (from the tracking side), streamed to their files rather than held.
@@ -117,18 +119,23 @@ int Pipeline::run(RunControl& control) {
   std::vector<CheckpointWriter::TrajectoryFile> trajectory_files;
   for (const auto& file : {keyframe_file, frame_file})
     if (file) trajectory_files.push_back(file);
-  FrameTracker tracker(config_, makePoseProvider(config_, loop_closer.get()), stats_,
-                       frame_file.get());
-  Mapper mapper(config_, stats_, corrections.get(), keyframe_file.get());
+  FrameTracker tracker(
+      makeKeyframeSelector(config_.keyframe, config_.pose),
+      makePoseProvider(config_.pose, config_.tracking, config_.camera, config_.filter.min_depth,
+                       config_.filter.max_depth, loop_closer.get()),
+      stats_, frame_file.get());
+  Mapper mapper(config_.camera, config_.filter, config_.map, config_.submaps, stats_,
+                corrections.get(), keyframe_file.get());
   if (!outputs_.mesh_path.empty()) mapper.keepMeshes();
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
-               effectiveKeyframePolicy(config_), stats_.loop_closure ? "on" : "off");
+               effectiveKeyframePolicy(config_.keyframe, config_.pose),
+               stats_.loop_closure ? "on" : "off");
   if (!outputs_.config_path.empty()) {
     std::ofstream(outputs_.config_path) << config_.toYaml();
   }
 
-  FrameQueue queue(static_cast<std::size_t>(config_.queue_capacity),
+  FrameQueue queue(static_cast<std::size_t>(config_.queue.capacity),
                    source_->isLive() ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
   CheckpointWriter writer([this](const CheckpointWriter::Result& r) {
@@ -258,12 +265,12 @@ int Pipeline::run(RunControl& control) {
         fusion.request(MapRequest::kViewer,
                        [&publication](const Mapper& m) { publication.publishMap(m); });
       const std::uint64_t keyframes = tracker.keyframesAccepted();
-      const bool by_count = config_.checkpoint_every_keyframes > 0 &&
+      const bool by_count = config_.checkpoint.every_keyframes > 0 &&
                             keyframes - keyframes_at_checkpoint >=
-                                static_cast<std::uint64_t>(config_.checkpoint_every_keyframes) &&
-                            now() - last_checkpoint >= config_.checkpoint_min_seconds;
-      const bool by_time = config_.checkpoint_every_seconds > 0 &&
-                           now() - last_checkpoint >= config_.checkpoint_every_seconds &&
+                                static_cast<std::uint64_t>(config_.checkpoint.every_keyframes) &&
+                            now() - last_checkpoint >= config_.checkpoint.min_seconds;
+      const bool by_time = config_.checkpoint.every_seconds > 0 &&
+                           now() - last_checkpoint >= config_.checkpoint.every_seconds &&
                            keyframes > keyframes_at_checkpoint;
       if (control.snapshot.exchange(false) || by_count || by_time) {
         checkpoint();
