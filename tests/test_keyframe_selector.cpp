@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rgbdmap/mapping/keyframe_selector.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 namespace {
