@@ -13,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/png_decoder.hpp"
 #include "rgbdmap/base/run_stats.hpp"
@@ -25,6 +24,7 @@
 #include "rgbdmap/mapping/mesh_extractor.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace {
 
@@ -46,7 +46,7 @@ struct Fixture {
   Fixture() {
     config.loadPreset(rgbdmap::TumSequence::presetForFolder(kSequence));
     rgbdmap::TumSequence::Options options;
-    options.depth_scale = config.depth_scale;
+    options.depth_scale = config.camera.depth_scale;
     sequence = std::make_unique<rgbdmap::TumSequence>(kSequence, options);
     load(kFrameIndex, frame);
 
@@ -57,8 +57,8 @@ struct Fixture {
     smoother().apply(filtered_depth, buffers);
     projector().project(filtered_depth, frame.color, frame.pose, points);
 
-    scene = std::make_unique<rgbdmap::VoxelMap>(config.voxel_size);
-    rgbdmap::KeyframeIntegrator integrator(config);
+    scene = std::make_unique<rgbdmap::VoxelMap>(config.map.voxel_size);
+    rgbdmap::KeyframeIntegrator integrator(config.camera, config.filter, config.map);
     rgbdmap::RunStats stats;
     rgbdmap::Frame keyframe;
     for (std::size_t i = 0; i < sequence->size(); i += kSceneEveryN) {
@@ -75,28 +75,19 @@ struct Fixture {
   }
 
   // The stages configured as KeyframeIntegrator configures them for this sequence.
-  rgbdmap::DepthFilter filter() const {
-    rgbdmap::DepthFilter f;
-    f.min_depth = config.min_depth;
-    f.max_depth = config.max_depth;
-    f.edge_jump = config.edge_jump;
-    const bool fast = config.outlier_filter == "fast";
-    f.remove_flying_pixels = fast;
-    f.min_neighbours = fast ? config.speck_min_neighbours : 0;
-    return f;
-  }
+  rgbdmap::DepthFilter filter() const { return rgbdmap::DepthFilter(config.filter); }
   rgbdmap::DepthSmoother smoother() const {
     rgbdmap::DepthSmoother s;
-    s.radius = config.smooth_radius;
-    s.max_relative_range = config.edge_jump;
+    s.radius = config.filter.smooth_radius;
+    s.max_relative_range = config.filter.edge_jump;
     s.drop_unsmoothed = true;
     return s;
   }
   rgbdmap::BackProjector projector(bool subsample = true) const {
-    rgbdmap::BackProjector p(config.camera, config.undistort);
+    rgbdmap::BackProjector p(config.camera, config.filter.undistort);
     const double f = std::min(config.camera.fx, config.camera.fy);
-    if (subsample && config.subsample)
-      p.setSubsampleBelowDepth(static_cast<float>(config.voxel_size * f / 4.0));
+    if (subsample && config.filter.subsample)
+      p.setSubsampleBelowDepth(static_cast<float>(config.map.voxel_size * f / 4.0));
     return p;
   }
 };
@@ -198,8 +189,8 @@ BENCHMARK(BM_BackProject)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 rgbdmap::TsdfIntegrator tsdfFor(const rgbdmap::Config& config) {
   rgbdmap::TsdfIntegrator t;
   t.camera = config.camera;
-  t.truncation = config.map_truncation;
-  t.truncation_sigmas = config.map_truncation_sigmas;
+  t.truncation = config.map.truncation;
+  t.truncation_sigmas = config.map.truncation_sigmas;
   return t;
 }
 
@@ -212,7 +203,7 @@ void BM_TsdfIntegrateIntoEmptyMap(benchmark::State& state) {
   rgbdmap::WorkerPool pool(static_cast<int>(state.range(0)));
   std::size_t blocks = 0;
   for (auto _ : state) {
-    rgbdmap::VoxelMap map(f.config.voxel_size);
+    rgbdmap::VoxelMap map(f.config.map.voxel_size);
     tsdf.integrate(f.filtered_depth, f.frame.color, f.frame.pose, map, &pool);
     blocks = map.blockCount();
     benchmark::DoNotOptimize(blocks);
@@ -264,7 +255,7 @@ BENCHMARK(BM_ExtractMesh)->Unit(benchmark::kMillisecond);
 // The whole keyframe path (filter, smooth, project, fuse) into the scene map.
 void BM_KeyframeIntegrate(benchmark::State& state) {
   Fixture& f = fixture();
-  rgbdmap::KeyframeIntegrator integrator(f.config);
+  rgbdmap::KeyframeIntegrator integrator(f.config.camera, f.config.filter, f.config.map);
   rgbdmap::VoxelMap map = *f.scene;
   auto stats = std::make_unique<rgbdmap::RunStats>();
   for (auto _ : state) {

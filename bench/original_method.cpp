@@ -31,10 +31,10 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 
 namespace {
@@ -216,7 +216,7 @@ int run(const Options& o) {
   const rgbdmap::CameraIntrinsics& camera = config.camera;
 
   std::vector<AssociationRow> rows = o.association.empty()
-                                         ? associate(o.sequence, config.depth_scale)
+                                         ? associate(o.sequence, config.camera.depth_scale)
                                          : readAssociation(o.association);
   if (!o.write_association.empty()) writeAssociation(rows, o.write_association);
   if (rows.empty()) throw rgbdmap::InputError(o.sequence + ": no frame has ground truth");
@@ -242,7 +242,7 @@ int run(const Options& o) {
   std::vector<std::size_t> keyframe_points;
   for (std::size_t i = 0; i < frames.size(); i += static_cast<std::size_t>(o.every_n)) {
     const auto keyframe_start = Clock::now();
-    backProject(frames[i], camera, config.depth_scale, rows[i].pose, *keyframe_cloud);
+    backProject(frames[i], camera, config.camera.depth_scale, rows[i].pose, *keyframe_cloud);
     pcl::StatisticalOutlierRemoval<pcl::PointXYZRGB> sor;
     sor.setInputCloud(keyframe_cloud);
     sor.setMeanK(o.sor_mean_k);

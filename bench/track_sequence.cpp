@@ -17,11 +17,11 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "rgbdmap/tracking/rgbd_odometry.hpp"
 
@@ -42,17 +42,18 @@ double percentile(std::vector<double> v, double q) {
 }
 
 Outcome track(rgbdmap::TumSequence& sequence, rgbdmap::Config config, const std::string& method) {
-  config.pose_source = "odometry";
+  config.pose.source = "odometry";
   config.tracking.method = method;
   std::unique_ptr<rgbdmap::PoseProvider> tracker;
   if (method == "dense") {
-    tracker = rgbdmap::makePoseProvider(config);
+    tracker = rgbdmap::makePoseProvider(config.pose, config.tracking, config.camera,
+                                        config.filter.min_depth, config.filter.max_depth);
   } else {
     // OpenCV's odometries frame to frame, as the peers were measured: every frame becomes the
     // reference of the next.
     rgbdmap::RgbdOdometryPoses::Options options;
-    options.min_depth = config.min_depth;
-    options.max_depth = config.max_depth;
+    options.min_depth = config.filter.min_depth;
+    options.max_depth = config.filter.max_depth;
     options.new_reference_translation = 0;
     options.new_reference_rotation = 0;
     options.icp = method == "opencv_rgbd_icp";
@@ -115,7 +116,7 @@ int main(int argc, char** argv) {
       config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
     }
     rgbdmap::TumSequence::Options options;
-    options.depth_scale = config.depth_scale;
+    options.depth_scale = config.camera.depth_scale;
     rgbdmap::TumSequence sequence(folder, options);
 
     std::vector<Outcome> outcomes;

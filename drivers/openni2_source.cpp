@@ -33,11 +33,11 @@ constexpr std::int64_t kPairingToleranceUs = 20000;
 // that went away.
 class OpenNI2Source : public FrameSource {
  public:
-  OpenNI2Source(const std::string& uri_or_file, const Config& config)
+  OpenNI2Source(const std::string& uri_or_file, const CameraOptions& camera, double rate)
       : runtime_(openni2::Runtime::acquire()),
         requested_(uri_or_file),
-        settings_{config.camera, config.camera_intrinsics == "device"},
-        rate_(config.rate) {
+        settings_{camera, camera.intrinsics == "device"},
+        rate_(rate) {
     open(requested_, true);
     reopen_uri_ = dev_->uri();
   }
@@ -273,8 +273,8 @@ bool OpenNI2Source::reconnect() {
 }  // namespace
 
 std::unique_ptr<FrameSource> openOpenNI2Source(const std::string& uri_or_file,
-                                               const Config& config) {
-  return std::make_unique<OpenNI2Source>(uri_or_file, config);
+                                               const CameraOptions& camera, double rate) {
+  return std::make_unique<OpenNI2Source>(uri_or_file, camera, rate);
 }
 
 std::vector<std::string> listOpenNI2Devices() {

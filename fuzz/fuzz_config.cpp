@@ -1,8 +1,8 @@
 // The configuration: the first line is a `--set key=value`, the rest a YAML file for --config.
 // Any bytes give a configuration or an InputError naming the key or file, never a crash.
 #include "fuzz_input.hpp"
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace rgbdmap;

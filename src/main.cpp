@@ -7,8 +7,8 @@
 #include <fstream>
 #include <memory>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
@@ -36,23 +36,6 @@ struct MapOptions {
   bool markdown = false;
 };
 
-// Every config key as a Markdown table: docs/configuration.md is this output, so the reference
-// cannot drift from the code (a test compares them).
-std::string configurationTable(rgbdmap::Config& config) {
-  auto escape = [](std::string text) {
-    for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2))
-      text.replace(at, 1, "\\|");
-    return text;
-  };
-  std::string table = "| key | default | meaning |\n| --- | --- | --- |\n";
-  for (const rgbdmap::Config::Key& k : config.keys()) {
-    const std::string value = k.get();
-    table += "| `" + k.name + "` | " + (value.empty() ? "" : "`" + escape(value) + "`") + " | " +
-             escape(k.help) + " |\n";
-  }
-  return table;
-}
-
 // A stop requested before mapping began: nothing was mapped and nothing is written.
 bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   if (!control.stop.load()) return false;
@@ -64,12 +47,8 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, rgbdmap::RunSi
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
-    if (o.markdown) {
-      std::printf("%s", configurationTable(config).c_str());
-      return 0;
-    }
-    for (const Config::Key& k : config.keys())
-      std::printf("%-28s %-12s %s\n", k.name.c_str(), k.get().c_str(), k.help.c_str());
+    // --markdown: docs/configuration.md's table, so the reference cannot drift from the code.
+    std::printf("%s", listKeys(config.keys(), o.markdown).c_str());
     return 0;
   }
   if (o.source.empty()) {
@@ -89,8 +68,8 @@ int runMapping(const MapOptions& o, rgbdmap::RunControl& control, rgbdmap::RunSi
   if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (stoppedDuringStartUp(control)) return 0;
-  config.pose_source = resolvePoseSource(
-      config.pose_source, source->providesPoses(),
+  config.pose.source = resolvePoseSource(
+      config.pose.source, source->providesPoses(),
       source->describe() +
           ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
 

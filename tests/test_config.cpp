@@ -2,8 +2,8 @@
 
 #include <fstream>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -24,10 +24,10 @@ TEST(Config, SetsKeysFromText) {
   c.set("keyframe.every_n", "3", "--set");
   c.set("filter.undistort", "false", "--set");
   c.set("keyframe.policy", "both", "--set");
-  EXPECT_DOUBLE_EQ(c.voxel_size, 0.005);
-  EXPECT_EQ(c.keyframe_every_n, 3);
-  EXPECT_FALSE(c.undistort);
-  EXPECT_EQ(c.keyframe_policy, "both");
+  EXPECT_DOUBLE_EQ(c.map.voxel_size, 0.005);
+  EXPECT_EQ(c.keyframe.every_n, 3);
+  EXPECT_FALSE(c.filter.undistort);
+  EXPECT_EQ(c.keyframe.policy, "both");
 }
 
 TEST(Config, RejectsUnknownKeysAndBadValuesNamingTheKey) {
@@ -48,7 +48,7 @@ TEST(Config, RejectsUnknownKeysAndBadValuesNamingTheKey) {
   EXPECT_NE(
       messageOf([&] { c.set("filter.min_depth", "9", "--set"); }).find("below filter.max_depth"),
       std::string::npos);
-  EXPECT_DOUBLE_EQ(c.voxel_size, 0.01);  // a rejected value leaves the old one
+  EXPECT_DOUBLE_EQ(c.map.voxel_size, 0.01);  // a rejected value leaves the old one
 }
 
 TEST(Config, YamlErrorsNameFileAndLine) {
@@ -85,7 +85,7 @@ TEST(Config, PresetsLoadAndEffectiveConfigRoundTrips) {
   ASSERT_EQ(original_keys.size(), reloaded_keys.size());
   for (std::size_t i = 0; i < original_keys.size(); ++i)
     EXPECT_EQ(reloaded_keys[i].get(), original_keys[i].get()) << original_keys[i].name;
-  EXPECT_DOUBLE_EQ(reloaded.voxel_size, 0.004);
+  EXPECT_DOUBLE_EQ(reloaded.map.voxel_size, 0.004);
   EXPECT_DOUBLE_EQ(reloaded.camera.cy, 255.3);
   EXPECT_NE(messageOf([] { Config().loadPreset("tum_fr9"); }).find("unknown preset"),
             std::string::npos);

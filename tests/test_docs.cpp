@@ -30,7 +30,16 @@ TEST(Docs, ConfigurationReferenceIsTheBinarysOwnTable) {
   ASSERT_NE(from, std::string::npos) << "docs/configuration.md has no generated table";
   ASSERT_NE(to, std::string::npos);
   const std::size_t start = doc.find('\n', from) + 1;
-  EXPECT_EQ(doc.substr(start, to - start), table)
+  std::string documented = doc.substr(start, to - start);
+  // The ros.* keys are the ROS adapter's (ros/src/ros_options.cpp): a build without ROS lacks
+  // them, and the rest of the table must still match.
+  if (table.find("| `ros.") == std::string::npos) {
+    std::istringstream lines(documented);
+    documented.clear();
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind("| `ros.", 0) != 0) documented += line + "\n";
+  }
+  EXPECT_EQ(documented, table)
       << "docs/configuration.md is out of date: cmake --build build --target rgbdmap && "
          "bash scripts/update-docs.sh build";
   // Every key is in it.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rgbdmap/mapping/keyframe_selector.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -128,17 +129,19 @@ TEST(KeyframeSelector, AKeyframeNotAcceptedIsProposedAgain) {
 
 TEST(KeyframeSelector, DefaultPolicyIsMotionForTrackedCamerasAndIntervalForGivenPoses) {
   Config config;
-  EXPECT_EQ(config.keyframe_policy, "auto");
-  config.pose_source = "odometry";  // live cameras, recordings, folders without ground truth
-  EXPECT_EQ(effectiveKeyframePolicy(config), "motion");
-  EXPECT_EQ(makeKeyframeSelector(config).policy, KeyframeSelector::Policy::kMotion);
+  EXPECT_EQ(config.keyframe.policy, "auto");
+  config.pose.source = "odometry";  // live cameras, recordings, folders without ground truth
+  EXPECT_EQ(effectiveKeyframePolicy(config.keyframe, config.pose), "motion");
+  EXPECT_EQ(makeKeyframeSelector(config.keyframe, config.pose).policy,
+            KeyframeSelector::Policy::kMotion);
   for (const char* source : {"groundtruth", "trajectory"}) {
-    config.pose_source = source;
-    EXPECT_EQ(effectiveKeyframePolicy(config), "interval") << source;
+    config.pose.source = source;
+    EXPECT_EQ(effectiveKeyframePolicy(config.keyframe, config.pose), "interval") << source;
   }
-  config.keyframe_policy = "both";  // an explicit choice is kept
-  config.pose_source = "odometry";
-  EXPECT_EQ(makeKeyframeSelector(config).policy, KeyframeSelector::Policy::kBoth);
+  config.keyframe.policy = "both";  // an explicit choice is kept
+  config.pose.source = "odometry";
+  EXPECT_EQ(makeKeyframeSelector(config.keyframe, config.pose).policy,
+            KeyframeSelector::Policy::kBoth);
 }
 
 }  // namespace

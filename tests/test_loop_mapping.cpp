@@ -9,10 +9,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 #include "test_support.hpp"
 
@@ -189,14 +189,15 @@ TEST(Submaps, ACameraAtRestKeepsOneSubmapAndBoundedMemory) {
   ASSERT_TRUE(sequence.load(0, frame, error)) << error;
   RunStats stats;
   PoseCorrections corrections;
-  Mapper mapper(config, stats, &corrections);
+  Mapper mapper(config.camera, config.filter, config.map, config.submaps, stats, &corrections);
   frame.anchor = 0;
   std::size_t bytes_after_first_submap_length = 0;
-  const int long_rest = 3 * config.loop.submap_keyframes;
+  const int long_rest = 3 * config.submaps.submap_keyframes;
   for (int i = 0; i < long_rest; ++i) {
     frame.timestamp += 1.0 / 30;
     mapper.fuse(frame);
-    if (i == config.loop.submap_keyframes) bytes_after_first_submap_length = mapper.memoryBytes();
+    if (i == config.submaps.submap_keyframes)
+      bytes_after_first_submap_length = mapper.memoryBytes();
   }
   EXPECT_EQ(mapper.submaps(), 1u);
   EXPECT_EQ(mapper.memoryBytes(), bytes_after_first_submap_length);

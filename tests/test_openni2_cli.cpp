@@ -20,10 +20,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/drivers/openni2_source.hpp"
 #include "rgbdmap/drivers/usb_cameras.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "test_support.hpp"
 
@@ -154,7 +154,7 @@ TEST(OpenNI2Cli, RecordFromTheOniReplaysTheSameFrames) {
 
   Config config;
   config.loadPreset("kinect_v1");
-  config.rate = 0;
+  config.replay.rate = 0;
   auto original = openSource("openni2:" + oniFile(), config);
   Config tum_units = config;  // the recorded folder holds TUM depth units, 5000 per metre
   tum_units.set("camera.depth_scale", "5000", "test");

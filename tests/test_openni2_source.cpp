@@ -15,9 +15,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/drivers/openni2_source.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -31,8 +31,12 @@ std::string oniFile() { return test::dataDir() + "/oni/kinect_v1_12frames.oni"; 
 Config kinectConfig(double rate = 0) {
   Config config;
   config.loadPreset("kinect_v1");
-  config.rate = rate;
+  config.replay.rate = rate;
   return config;
+}
+
+std::unique_ptr<FrameSource> openOpenNI2(const std::string& uri, const Config& config) {
+  return openOpenNI2Source(uri, config.camera, config.replay.rate);
 }
 
 struct Captured {
@@ -147,7 +151,7 @@ DepthStats statsOf(const cv::Mat& metres) {
 }
 
 TEST(OpenNI2Source, RecordingYieldsItsTwelveFramesThenEnds) {
-  auto source = openOpenNI2Source(oniFile(), kinectConfig());
+  auto source = openOpenNI2(oniFile(), kinectConfig());
   EXPECT_FALSE(source->isLive());
   EXPECT_FALSE(source->canReconnect());
   EXPECT_FALSE(source->providesPoses());
@@ -195,7 +199,7 @@ TEST(OpenNI2Source, DepthAndColourMatchOpenNI2ReadFrameOnTheFile) {
   const DirectFrames direct = readDirectly(copy);
   ASSERT_EQ(direct.depth_mm.size(), 12u);
   ASSERT_EQ(direct.rgb.size(), 12u);
-  auto source = openOpenNI2Source(oniFile(), kinectConfig());
+  auto source = openOpenNI2(oniFile(), kinectConfig());
   const std::vector<Captured> frames = readAll(*source);
   ASSERT_EQ(frames.size(), 12u);
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -228,7 +232,7 @@ TEST(OpenNI2Source, DepthAndColourMatchOpenNI2ReadFrameOnTheFile) {
 }
 
 TEST(OpenNI2Source, ReplayRateOneKeepsTheRecordedTiming) {
-  auto source = openOpenNI2Source(oniFile(), kinectConfig(1.0));
+  auto source = openOpenNI2(oniFile(), kinectConfig(1.0));
   const auto start = Clock::now();
   const std::vector<Captured> frames = readAll(*source);
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
@@ -241,7 +245,7 @@ TEST(OpenNI2Source, ReplayRateOneKeepsTheRecordedTiming) {
 TEST(OpenNI2Source, IntrinsicsFromTheDeviceFieldOfView) {
   Config config = kinectConfig();
   config.set("camera.intrinsics", "device", "test");
-  auto source = openOpenNI2Source(oniFile(), config);
+  auto source = openOpenNI2(oniFile(), config);
   const CameraIntrinsics camera = source->intrinsics();
   // The recording stores only the depth stream's field of view (1.014469 x 0.789809 rad).
   EXPECT_NEAR(camera.fx, 640 / (2 * std::tan(1.014469 / 2)), 0.05);
@@ -253,7 +257,7 @@ TEST(OpenNI2Source, IntrinsicsFromTheDeviceFieldOfView) {
 
 std::string openError(const std::string& uri, const Config& config) {
   try {
-    openOpenNI2Source(uri, config);
+    openOpenNI2(uri, config);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -285,7 +289,7 @@ TEST(OpenNI2Source, BadRecordingsGiveOneClearMessageNamingTheFile) {
   // Either refused at open or played up to where it breaks; never a crash or a hang.
   message = openError(truncated, kinectConfig());
   if (message.empty()) {
-    auto source = openOpenNI2Source(truncated, kinectConfig());
+    auto source = openOpenNI2(truncated, kinectConfig());
     EXPECT_LT(readAll(*source).size(), 12u);
   } else {
     EXPECT_NE(message.find(truncated), std::string::npos) << message;

@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -6,11 +6,11 @@
 #include <fstream>
 #include <set>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -8,9 +8,9 @@
 #include <functional>
 #include <iostream>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "test_support.hpp"
 
@@ -27,7 +27,7 @@ Config configFor(const std::string& folder) {
   Config config;
   const std::string preset = TumSequence::presetForFolder(folder);
   config.loadPreset(preset.empty() ? "default" : preset);
-  config.pose_source = "odometry";
+  config.pose.source = "odometry";
   config.tracking.method = "dense";
   return config;
 }
@@ -40,7 +40,9 @@ Tracked track(const std::string& folder, const std::vector<std::size_t>& order,
               const std::function<void(std::size_t, Frame&)>& edit = nullptr) {
   const Config config = configFor(folder);
   TumSequence sequence(folder);
-  std::unique_ptr<PoseProvider> tracker = makePoseProvider(config);
+  std::unique_ptr<PoseProvider> tracker =
+      makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
+                       config.filter.max_depth);
   Tracked out;
   Frame frame;
   std::string error;

@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"

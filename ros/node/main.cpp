@@ -11,10 +11,10 @@
 #include <fstream>
 #include <thread>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
 #include "rgbdmap/ros/topic_source.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
@@ -82,8 +82,8 @@ int runNode(RunControl& control, RunSignals& signals) {
     topics.shutdown();
     return 0;
   }
-  config.pose_source = resolvePoseSource(
-      config.pose_source, topics.providesPoses(),
+  config.pose.source = resolvePoseSource(
+      config.pose.source, topics.providesPoses(),
       "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
   PipelineOutputs outputs = outputsBeside(settings.out);
   if (!signals.runStarts({temporaryFiles(outputs)})) {

@@ -70,8 +70,7 @@ std::string pick(const std::string& bag, const TopicList& topics, const std::str
 
 }  // namespace
 
-BagTopics chooseBagTopics(const std::string& bag, const TopicList& topics,
-                          const Config::RosTopics& keys) {
+BagTopics chooseBagTopics(const std::string& bag, const TopicList& topics, const RosOptions& keys) {
   BagTopics chosen;
   chosen.color = pick(bag, topics, keys.color_topic, "ros.color_topic", kColorNames, false);
   chosen.depth = pick(bag, topics, keys.depth_topic, "ros.depth_topic", kDepthNames, true);

@@ -96,7 +96,7 @@ CameraIntrinsics intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info) {
 }
 
 bool intrinsicsFromCameraInfoWanted(const Config& config) {
-  if (config.camera_intrinsics == "device") return true;
+  if (config.camera.intrinsics == "device") return true;
   if (config.preset != "default") return false;
   const CameraIntrinsics d;
   const CameraIntrinsics& c = config.camera;

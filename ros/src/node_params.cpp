@@ -62,7 +62,7 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   const std::set<std::string> settings = {"config",    "out",          "stats",
                                           "map_frame", "camera_frame", "map_interval"};
   std::set<std::string> keys;
-  for (const Config::Key& key : config.keys()) keys.insert(key.name);
+  for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
     for (const std::string& name : names) {
       if (name.rfind(prefix, 0) != 0) continue;
@@ -76,7 +76,7 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
                          "~camera_frame, ~map_interval)");
     }
   }
-  for (const Config::Key& key : config.keys()) {
+  for (const Key& key : config.keys()) {
     std::string name = key.name;
     for (char& c : name)
       if (c == '.') c = '/';

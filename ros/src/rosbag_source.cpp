@@ -26,7 +26,7 @@ std::string presetForBag(const std::string& path) {
 }
 
 RosbagSource::RosbagSource(const std::string& path, const Config& config)
-    : path_(path), camera_(config.camera), rate_(config.rate) {
+    : path_(path), camera_(config.camera), rate_(config.replay.rate) {
   if (!pathExists(path)) throw InputError(path + ": no such file");
   if (!isFile(path)) throw InputError(path + ": not a file (expected a ROS bag)");
   try {
@@ -35,7 +35,7 @@ RosbagSource::RosbagSource(const std::string& path, const Config& config)
     rosbag::View all(bag_);
     for (const rosbag::ConnectionInfo* c : all.getConnections())
       topics.emplace_back(c->topic, c->datatype);
-    topics_ = chooseBagTopics(path, topics, config.ros);
+    topics_ = chooseBagTopics(path, topics, rosOptions(config));
 
     // Checked before mapping starts, so a wrong encoding is one message, not a skipped stream.
     const ImagePtr color = firstImage(topics_.color);

@@ -10,10 +10,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/ros/rosbag_source.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "ros_test_support.hpp"
 
 namespace rgbdmap::test {
@@ -85,7 +85,7 @@ TEST(RosbagSource, TumBagGivesTheFoldersMap) {
 TEST(RosbagSource, PairsAsTheFolderDoes) {
   Config config;
   config.loadPreset("tum_fr1");
-  config.rate = 0;
+  config.replay.rate = 0;
   RosbagSource source(sharedBag(kXyz), config);
   const TumSequence folder(tumDir(kXyz));
   Frame frame;

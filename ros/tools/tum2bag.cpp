@@ -13,10 +13,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/text_lines.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 
 namespace {
@@ -112,9 +112,9 @@ int convert(const std::string& folder, const std::string& out, const std::string
       msg.header.frame_id = depth_frame;
       // The same conversion as the folder source's, so that bag and folder give one map.
       if (depth16)
-        raw.convertTo(converted, CV_16U, 1000.0 / config.depth_scale);
+        raw.convertTo(converted, CV_16U, 1000.0 / config.camera.depth_scale);
       else
-        raw.convertTo(converted, CV_32F, 1.0 / config.depth_scale);
+        raw.convertTo(converted, CV_32F, 1.0 / config.camera.depth_scale);
       fillImage(msg, converted,
                 depth16 ? sensor_msgs::image_encodings::TYPE_16UC1
                         : sensor_msgs::image_encodings::TYPE_32FC1);

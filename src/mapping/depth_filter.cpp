@@ -6,6 +6,13 @@
 
 namespace rgbdmap {
 
+DepthFilter::DepthFilter(const FilterOptions& o)
+    : min_depth(o.min_depth),
+      max_depth(o.max_depth),
+      remove_flying_pixels(o.outliers == "fast"),
+      edge_jump(o.edge_jump),
+      min_neighbours(o.outliers == "fast" ? o.speck_min_neighbours : 0) {}
+
 RGBDMAP_VECTOR_CLONES void DepthFilter::apply(const cv::Mat& input, cv::Mat& output,
                                               cv::Mat& scratch) const {
   CV_Assert(input.type() == CV_32FC1);

@@ -12,44 +12,35 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-DepthFilter makeFilter(const Config& c) {
-  DepthFilter f;
-  f.min_depth = c.min_depth;
-  f.max_depth = c.max_depth;
-  const bool fast = c.outlier_filter == "fast";
-  f.remove_flying_pixels = fast;
-  f.edge_jump = c.edge_jump;
-  f.min_neighbours = fast ? c.speck_min_neighbours : 0;
-  return f;
-}
-
-TsdfIntegrator makeTsdf(const Config& c) {
+TsdfIntegrator makeTsdf(const CameraIntrinsics& camera, const FilterOptions& filter,
+                        const MapOptions& map) {
   TsdfIntegrator t;
-  t.camera = c.camera;
-  t.truncation = c.map_truncation;
-  t.truncation_sigmas = c.map_truncation_sigmas;
-  t.min_incidence_cosine = c.map_min_incidence_cosine;
+  t.camera = camera;
+  t.truncation = map.truncation;
+  t.truncation_sigmas = map.truncation_sigmas;
+  t.min_incidence_cosine = map.min_incidence_cosine;
   // Samples at most half a block apart at the farthest depth fused find every block a surface
   // crosses (1 cm voxels, 4 m: every 4th pixel).
-  const double block = c.voxel_size * VoxelMap::kBlockEdge;
-  const int spaced = static_cast<int>(0.5 * block * c.camera.fx / std::max(c.max_depth, 0.1));
-  t.allocation_stride = c.subsample ? std::clamp(spaced, 1, 4) : 1;
+  const double block = map.voxel_size * VoxelMap::kBlockEdge;
+  const int spaced = static_cast<int>(0.5 * block * camera.fx / std::max(filter.max_depth, 0.1));
+  t.allocation_stride = filter.subsample ? std::clamp(spaced, 1, 4) : 1;
   return t;
 }
 
 }  // namespace
 
-KeyframeIntegrator::KeyframeIntegrator(const Config& config, int threads)
-    : filter_(makeFilter(config)),
+KeyframeIntegrator::KeyframeIntegrator(const CameraIntrinsics& camera, const FilterOptions& filter,
+                                       const MapOptions& map, int threads)
+    : filter_(filter),
       // Fusion averages many views of each surface, so unsmoothable pixels are dropped.
-      smoother_{config.smooth_radius, config.edge_jump, 0.75, true},
-      tsdf_(makeTsdf(config)),
+      smoother_{filter.smooth_radius, filter.edge_jump, 0.75, true},
+      tsdf_(makeTsdf(camera, filter, map)),
       pool_(threads),
-      statistical_(config.outlier_filter == "statistical"),
-      sor_mean_k_(config.sor_mean_k),
-      sor_stddev_(config.sor_stddev),
-      projector_(config.camera, config.undistort) {
-  if (config.undistort && config.camera.hasDistortion()) lens_.emplace(config.camera);
+      statistical_(filter.outliers == "statistical"),
+      sor_mean_k_(filter.sor_mean_k),
+      sor_stddev_(filter.sor_stddev),
+      projector_(camera, filter.undistort) {
+  if (filter.undistort && camera.hasDistortion()) lens_.emplace(camera);
 }
 
 void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {

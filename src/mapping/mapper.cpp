@@ -24,12 +24,13 @@ double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).
 
 }  // namespace
 
-Mapper::Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections,
+Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, const MapOptions& map,
+               const SubmapOptions& submaps, RunStats& stats, const PoseCorrections* corrections,
                PoseSink* keyframe_trajectory)
-    : integrator_(config, WorkerPool::resolve(config.map_fusion_threads)),
-      voxel_size_(config.voxel_size),
-      min_observations_(static_cast<std::uint32_t>(config.map_min_observations)),
-      loop_(config.loop),
+    : integrator_(camera, filter, map, WorkerPool::resolve(map.fusion_threads)),
+      voxel_size_(map.voxel_size),
+      min_observations_(static_cast<std::uint32_t>(map.min_observations)),
+      submaps_(submaps),
       corrections_(corrections),
       map_(voxel_size_, min_observations_),
       keyframe_sink_(keyframe_trajectory ? keyframe_trajectory : &keyframes_),
@@ -43,8 +44,9 @@ bool Mapper::startsSubmap(const Frame& keyframe) const {
   // into submap after submap (a camera at rest kept 10 MB more a minute).
   if (keyframe.anchor == active_anchor_) return false;
   const Eigen::Isometry3d moved = active_start_.inverse() * keyframe.pose;
-  return active_keyframes_ >= loop_.submap_keyframes ||
-         moved.translation().norm() > loop_.submap_distance || angle(moved) > loop_.submap_rotation;
+  return active_keyframes_ >= submaps_.submap_keyframes ||
+         moved.translation().norm() > submaps_.submap_distance ||
+         angle(moved) > submaps_.submap_rotation;
 }
 
 void Mapper::closeSubmap() {

@@ -4,12 +4,9 @@
 #include <vector>
 
 namespace rgbdmap {
-FrameTracker::FrameTracker(const Config& config, std::unique_ptr<PoseProvider> poses,
+FrameTracker::FrameTracker(KeyframeSelector selector, std::unique_ptr<PoseProvider> poses,
                            RunStats& stats, PoseSink* trajectory)
-    : poses_(std::move(poses)),
-      selector_(makeKeyframeSelector(config)),
-      trajectory_(trajectory),
-      stats_(stats) {}
+    : poses_(std::move(poses)), selector_(selector), trajectory_(trajectory), stats_(stats) {}
 
 bool FrameTracker::track(Frame& frame) {
   const auto start = std::chrono::steady_clock::now();

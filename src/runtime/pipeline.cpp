@@ -50,19 +50,11 @@ class FirstError {
 // the source's camera, and the fusion threads resolved. Made once, before any thread starts;
 // nothing changes it afterwards.
 Config forSource(Config config, const FrameSource& source) {
-  config.camera = source.intrinsics();
+  static_cast<CameraIntrinsics&>(config.camera) = source.intrinsics();
   // A live camera leaves the other cores to tracking; a replay is limited by fusion alone.
-  if (config.map_fusion_threads == 0)
-    config.map_fusion_threads = source.isLive() ? 1 : WorkerPool::resolve(0);
+  if (config.map.fusion_threads == 0)
+    config.map.fusion_threads = source.isLive() ? 1 : WorkerPool::resolve(0);
   return config;
-}
-
-CheckpointPolicy checkpointPolicy(const Config& config) {
-  CheckpointPolicy policy;
-  policy.every_keyframes = config.checkpoint_every_keyframes;
-  policy.min_seconds = config.checkpoint_min_seconds;
-  policy.every_seconds = config.checkpoint_every_seconds;
-  return policy;
 }
 
 // A trajectory file streamed as it is recorded (null when not asked for).
@@ -135,12 +127,14 @@ int Pipeline::run(RunControl& control) {
   const bool live = source_->isLive();
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
   // move the trajectories and the map's submaps.
-  stats_.loop_closure = config.loop.enabled && tracksKeyframes(config);
+  stats_.loop_closure = config.loop.enabled && tracksKeyframes(config.pose, config.tracking);
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
   if (stats_.loop_closure) {
     corrections = std::make_unique<PoseCorrections>();
-    loop_closer = std::make_unique<LoopCloser>(config, *corrections, stats_, !live);
+    loop_closer = std::make_unique<LoopCloser>(config.camera, config.tracking, config.loop,
+                                               config.filter.min_depth, config.filter.max_depth,
+                                               *corrections, stats_, !live);
   }
   // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
   // frame (from the tracking side), streamed to their files rather than held.
@@ -151,16 +145,21 @@ int Pipeline::run(RunControl& control) {
   std::vector<CheckpointWriter::TrajectoryFile> trajectory_files;
   for (const auto& file : {keyframe_file, frame_file})
     if (file) trajectory_files.push_back(file);
-  FrameTracker tracker(config, makePoseProvider(config, loop_closer.get()), stats_,
-                       frame_file.get());
-  Mapper mapper(config, stats_, corrections.get(), keyframe_file.get());
+  FrameTracker tracker(
+      makeKeyframeSelector(config.keyframe, config.pose),
+      makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
+                       config.filter.max_depth, loop_closer.get()),
+      stats_, frame_file.get());
+  Mapper mapper(config.camera, config.filter, config.map, config.submaps, stats_, corrections.get(),
+                keyframe_file.get());
   if (!outputs_.mesh_path.empty()) mapper.keepMeshes();
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
-               effectiveKeyframePolicy(config), stats_.loop_closure ? "on" : "off");
+               effectiveKeyframePolicy(config.keyframe, config.pose),
+               stats_.loop_closure ? "on" : "off");
   if (!outputs_.config_path.empty()) std::ofstream(outputs_.config_path) << config.toYaml();
 
-  FrameQueue queue(static_cast<std::size_t>(config.queue_capacity),
+  FrameQueue queue(static_cast<std::size_t>(config.queue.capacity),
                    live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
   CheckpointWriter writer(reportWrites(stats_, outputs_.mesh_path));
@@ -188,7 +187,7 @@ int Pipeline::run(RunControl& control) {
   // keyframes (and so the map) independent of timing.
   TrackingThread tracking(
       {queue, tracker, fusion, publication, outputs_.publisher ? corrections.get() : nullptr},
-      !live, checkpointPolicy(config), checkpoint, stats_, control, fail);
+      !live, config.checkpoint, checkpoint, stats_, control, fail);
 
   // Wait: status until the tracking thread has taken every frame, then the rest in turn.
   StatusLine status(stats_, queue, outputs_.status_line, start);

@@ -63,12 +63,13 @@ std::string presetForSource(const std::string& spec) {
 std::unique_ptr<FrameSource> openSource(const std::string& spec, const Config& config) {
   if (spec.rfind("tum:", 0) == 0) {
     TumSequence::Options options;
-    options.depth_scale = config.depth_scale;
-    options.max_pose_gap = config.pose_max_gap;
-    return std::make_unique<TumSource>(spec.substr(4), options, config.camera, config.rate);
+    options.depth_scale = config.camera.depth_scale;
+    options.max_pose_gap = config.pose.max_gap;
+    return std::make_unique<TumSource>(spec.substr(4), options, config.camera, config.replay.rate);
   }
-  if (spec == "openni2") return openOpenNI2Source("", config);
-  if (spec.rfind("openni2:", 0) == 0) return openOpenNI2Source(spec.substr(8), config);
+  if (spec == "openni2") return openOpenNI2Source("", config.camera, config.replay.rate);
+  if (spec.rfind("openni2:", 0) == 0)
+    return openOpenNI2Source(spec.substr(8), config.camera, config.replay.rate);
   if (const SourceKind* kind = registeredKind(spec))
     return kind->open(spec.substr(kind->prefix.size()), config);
   throw InputError("--source " + spec + ": unknown source (expected " + sourceUsage() + ")");

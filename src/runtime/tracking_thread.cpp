@@ -17,7 +17,7 @@ double steadySeconds() {
 
 }  // namespace
 
-TrackingThread::TrackingThread(Parts parts, bool wait_for_fusion, CheckpointPolicy policy,
+TrackingThread::TrackingThread(Parts parts, bool wait_for_fusion, CheckpointOptions policy,
                                Checkpoint checkpoint, RunStats& stats, RunControl& control,
                                ErrorHandler on_error)
     : parts_(parts),

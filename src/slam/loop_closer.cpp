@@ -35,13 +35,14 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-LoopCloser::LoopCloser(const Config& config, PoseCorrections& corrections, RunStats& stats,
-                       bool lossless)
-    : options_(config.loop),
+LoopCloser::LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+                       const LoopOptions& loop, double min_depth, double max_depth,
+                       PoseCorrections& corrections, RunStats& stats, bool lossless)
+    : options_(loop),
       corrections_(corrections),
       stats_(stats),
       lossless_(lossless),
-      places_(config),
+      places_(camera, tracking, loop, min_depth, max_depth),
       thread_([this] { run(); }) {}
 
 LoopCloser::~LoopCloser() { finish(); }
@@ -140,8 +141,8 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
     }
     graph_.addNode(graph_.pose(reference) * from);
     graph_.addEdge(edgeOf(reference, id, from, information, false));
-    node.walked = nodes_[static_cast<std::size_t>(reference)].walked +
-                  from.translation().norm() + kMetresPerRadian * angle(from);
+    node.walked = nodes_[static_cast<std::size_t>(reference)].walked + from.translation().norm() +
+                  kMetresPerRadian * angle(from);
   }
   nodes_.push_back(node);
 
@@ -156,8 +157,8 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
     stats_.loops_verified.fetch_add(static_cast<std::uint64_t>(counts.verified));
     if (loop && !plausible(*loop)) {
       stats_.loops_rejected.fetch_add(1);
-      spdlog::debug("loop {} -> {} rejected: a larger correction than drift explains",
-                    loop->later, loop->earlier);
+      spdlog::debug("loop {} -> {} rejected: a larger correction than drift explains", loop->later,
+                    loop->earlier);
     } else if (loop) {
       bool agreed = false;
       for (Pending& p : pending_) {
@@ -265,10 +266,10 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   const LoopMeasurement& last = loops.back();
   // While the camera goes over old ground every keyframe closes a loop; say so when a revisit
   // starts or a loop moves the camera noticeably, and count the rest (stats, status line).
-  const bool revisit = last_closed_ < 0 || last.later - last_closed_ > options_.consistency_keyframes;
+  const bool revisit =
+      last_closed_ < 0 || last.later - last_closed_ > options_.consistency_keyframes;
   last_closed_ = last.later;
-  if (!revisit && moved.translation().norm() < kNoticeableShift &&
-      angle(moved) < kNoticeableShift)
+  if (!revisit && moved.translation().norm() < kNoticeableShift && angle(moved) < kNoticeableShift)
     return;
   const Node& later = nodes_[static_cast<std::size_t>(last.later)];
   const Node& earlier = nodes_[static_cast<std::size_t>(last.earlier)];

@@ -8,22 +8,23 @@ namespace {
 double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
 
 // The tracker's alignment settings, made finer and geometric for loops (LoopOptions).
-TrackingOptions verificationOptions(const Config& config) {
-  TrackingOptions o = config.tracking;
-  o.finest_level = std::min(config.loop.finest_level, o.coarsest_level);
-  o.depth_weight = config.loop.depth_weight;
+TrackingOptions verificationOptions(const TrackingOptions& tracking, const LoopOptions& loop) {
+  TrackingOptions o = tracking;
+  o.finest_level = std::min(loop.finest_level, o.coarsest_level);
+  o.depth_weight = loop.depth_weight;
   return o;
 }
 
 }  // namespace
 
-PlaceRecognition::PlaceRecognition(const Config& config)
-    : camera_(config.camera),
-      tracking_(verificationOptions(config)),
-      options_(config.loop),
-      min_depth_(static_cast<float>(config.min_depth)),
-      max_depth_(static_cast<float>(config.max_depth)),
-      features_(config.camera, config.loop.min_inliers, min_depth_, max_depth_),
+PlaceRecognition::PlaceRecognition(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+                                   const LoopOptions& loop, double min_depth, double max_depth)
+    : camera_(camera),
+      tracking_(verificationOptions(tracking, loop)),
+      options_(loop),
+      min_depth_(static_cast<float>(min_depth)),
+      max_depth_(static_cast<float>(max_depth)),
+      features_(camera, loop.min_inliers, min_depth_, max_depth_),
       aligner_(tracking_) {}
 
 bool PlaceRecognition::described(int id) const {

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/capture/camera_options.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
 
 namespace rgbdmap {
@@ -16,8 +16,9 @@ namespace rgbdmap {
 // synchronised where the device supports it; stamps are the device clock in seconds.
 // Throws InputError naming the file or device when it cannot be opened; with no camera attached
 // the message says what is on the USB bus and why it could not be used.
+// `rate`: replay.rate.
 std::unique_ptr<FrameSource> openOpenNI2Source(const std::string& uri_or_file,
-                                               const Config& config);
+                                               const CameraOptions& camera, double rate);
 
 // The devices OpenNI2 can open right now, one "URI (vendor name, USB vvvv:pppp)" each.
 std::vector<std::string> listOpenNI2Devices();

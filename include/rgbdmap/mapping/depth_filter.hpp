@@ -1,8 +1,29 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <string>
+
+#include "rgbdmap/base/option_keys.hpp"
 
 namespace rgbdmap {
+
+// How depth images are cleaned before fusion (config section "filter"): DepthFilter's range and
+// outlier tests, the smoothing window, PCL's statistical filter and lens undistortion (see
+// KeyframeIntegrator). The depth range also bounds tracking and loop closure.
+struct FilterOptions {
+  double min_depth = 0.3;         // m
+  double max_depth = 4.0;         // m
+  bool undistort = true;          // undo lens distortion when the camera has it
+  std::string outliers = "fast";  // fast | statistical | none
+  double edge_jump = 0.03;        // relative depth jump that marks a flying pixel
+  int speck_min_neighbours = 4;   // of 8, with similar depth
+  bool subsample = true;          // every 2nd pixel where 2 pixels < half a voxel
+  int smooth_radius = 2;          // inverse-depth averaging window, 0 = off
+  int sor_mean_k = 50;
+  double sor_stddev = 1.0;
+};
+
+Keys filterKeys(FilterOptions& o);
 
 // Cleans an organized depth image (CV_32FC1, metres, 0 = missing) in place, using pixel
 // neighbourhoods instead of a k-d tree:
@@ -13,11 +34,15 @@ namespace rgbdmap {
 //  - specks: a pixel with fewer than min_neighbours of its 8 neighbours at a similar depth is
 //    an isolated measurement; it is dropped.
 struct DepthFilter {
-  double min_depth = 0.3;
-  double max_depth = 4.0;
-  bool remove_flying_pixels = true;
-  double edge_jump = 0.03;
-  int min_neighbours = 4;
+  DepthFilter() : DepthFilter(FilterOptions{}) {}
+  // filter.outliers other than "fast" turns the flying-pixel and speck tests off.
+  explicit DepthFilter(const FilterOptions& o);
+
+  double min_depth;
+  double max_depth;
+  bool remove_flying_pixels;
+  double edge_jump;
+  int min_neighbours;
 
   // `scratch` is reused between calls to avoid allocating per frame.
   void apply(cv::Mat& depth, cv::Mat& scratch) const { apply(depth, depth, scratch); }

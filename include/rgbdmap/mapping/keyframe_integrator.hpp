@@ -3,7 +3,6 @@
 #include <optional>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
@@ -11,6 +10,7 @@
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
 #include "rgbdmap/mapping/depth_smoother.hpp"
+#include "rgbdmap/mapping/map_options.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
@@ -22,7 +22,8 @@ namespace rgbdmap {
 class KeyframeIntegrator {
  public:
   // `threads`: threads that fuse (the caller's included), from map.fusion_threads resolved.
-  KeyframeIntegrator(const Config& config, int threads = 1);
+  KeyframeIntegrator(const CameraIntrinsics& camera, const FilterOptions& filter,
+                     const MapOptions& map, int threads = 1);
   void integrate(const Frame& frame, VoxelMap& map, RunStats& stats);
   // The threads that fuse, for other work on the map between keyframes.
   WorkerPool& pool() { return pool_; }

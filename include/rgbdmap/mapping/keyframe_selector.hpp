@@ -5,9 +5,20 @@
 #include <optional>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/option_keys.hpp"
+#include "rgbdmap/tracking/pose_provider.hpp"
 
 namespace rgbdmap {
+
+// Which frames become keyframes (config section "keyframe"; see KeyframeSelector).
+struct KeyframeOptions {
+  std::string policy = "auto";    // auto | interval | motion | both
+  int every_n = 10;               // interval: N frames with a pose after the last keyframe
+  double min_translation = 0.05;  // motion: metres since the last keyframe
+  double min_rotation = 0.0873;   // motion: radians since the last keyframe (5 degrees)
+};
+
+Keys keyframeKeys(KeyframeOptions& o);
 
 // Decides which frames are fused into the map. Asking and committing are separate: a keyframe
 // that could not be handed to fusion (fusion busy on a live camera) is not committed, so the
@@ -15,10 +26,17 @@ namespace rgbdmap {
 struct KeyframeSelector {
   enum class Policy { kInterval, kMotion, kBoth };
 
-  Policy policy = Policy::kInterval;
-  int every_n = 10;               // interval: N frames with a pose after the last keyframe
-  double min_translation = 0.05;  // motion: metres since the last keyframe
-  double min_rotation = 0.0873;   // motion: radians since the last keyframe
+  KeyframeSelector() : KeyframeSelector(Policy::kInterval, KeyframeOptions{}) {}
+  KeyframeSelector(Policy policy, const KeyframeOptions& o)
+      : policy(policy),
+        every_n(o.every_n),
+        min_translation(o.min_translation),
+        min_rotation(o.min_rotation) {}
+
+  Policy policy;
+  int every_n;
+  double min_translation;
+  double min_rotation;
 
   // Called once per frame with a pose. True when this frame should become a keyframe; the first
   // posed frame always is.
@@ -55,11 +73,12 @@ struct KeyframeSelector {
 // should add nothing (each fused view of the same place also fuses the tracker's small errors),
 // and a fast one should add keyframes as fast as it uncovers new surfaces; with ground truth or a
 // trajectory file every N-th frame reproduces the original method and fixed fused-frame counts.
-inline std::string effectiveKeyframePolicy(const Config& config) {
-  if (config.keyframe_policy != "auto") return config.keyframe_policy;
-  return config.pose_source == "odometry" ? "motion" : "interval";
+inline std::string effectiveKeyframePolicy(const KeyframeOptions& keyframe,
+                                           const PoseOptions& pose) {
+  if (keyframe.policy != "auto") return keyframe.policy;
+  return pose.source == "odometry" ? "motion" : "interval";
 }
 
-KeyframeSelector makeKeyframeSelector(const Config& config);
+KeyframeSelector makeKeyframeSelector(const KeyframeOptions& keyframe, const PoseOptions& pose);
 
 }  // namespace rgbdmap

@@ -4,11 +4,11 @@
 #include <memory>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/map_options.hpp"
 #include "rgbdmap/mapping/surface_cloud.hpp"
 #include "rgbdmap/mapping/triangle_mesh.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
@@ -30,8 +30,10 @@ class Mapper {
  public:
   // `keyframe_trajectory` (may be null: then the Mapper keeps it, see keyframeTrajectory()) is
   // given each fused keyframe's pose as tracked, with its anchor.
-  Mapper(const Config& config, RunStats& stats, const PoseCorrections* corrections = nullptr,
-         PoseSink* keyframe_trajectory = nullptr);
+  // `map.fusion_threads` 0 is every core (WorkerPool::resolve).
+  Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, const MapOptions& map,
+         const SubmapOptions& submaps, RunStats& stats,
+         const PoseCorrections* corrections = nullptr, PoseSink* keyframe_trajectory = nullptr);
 
   void fuse(const Frame& keyframe);
 
@@ -66,7 +68,7 @@ class Mapper {
   KeyframeIntegrator integrator_;
   double voxel_size_;
   std::uint32_t min_observations_;
-  LoopOptions loop_;
+  SubmapOptions submaps_;
   const PoseCorrections* corrections_;
   VoxelMap map_;  // the active submap (the whole map without loop closure)
   std::int64_t active_anchor_ = -1;

@@ -8,6 +8,7 @@
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
+#include "rgbdmap/mapping/map_options.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
 namespace rgbdmap {
@@ -32,11 +33,13 @@ namespace rgbdmap {
 // carved by the views that see through it: blocks already in the map in front of a measurement
 // are updated too, and free space weighs as much as a measurement at the voxel's own depth.
 struct TsdfIntegrator {
-  CameraIntrinsics camera;            // pinhole (the images are undistorted before)
-  double truncation = 0.03;           // m: narrowest band
-  double truncation_sigmas = 3.0;     // band in units of the depth noise
-  int allocation_stride = 2;          // every n-th pixel of every n-th row allocates blocks
-  double min_incidence_cosine = 0.2;  // incidence cosines are clamped here (1: along the ray)
+  CameraIntrinsics camera;  // pinhole (the images are undistorted before)
+  // Defaults: the map.* keys'.
+  double truncation = MapOptions{}.truncation;                // m: narrowest band
+  double truncation_sigmas = MapOptions{}.truncation_sigmas;  // band in units of the depth noise
+  int allocation_stride = 2;  // every n-th pixel of every n-th row allocates blocks
+  // Incidence cosines are clamped here (1: along the ray).
+  double min_incidence_cosine = MapOptions{}.min_incidence_cosine;
   // Blocks a view sees through are looked for in every n-th image only: a scan of the whole map
   // costs about as much as allocating, and what went away is carved a few frames later instead.
   int seen_through_every = 4;

@@ -3,7 +3,6 @@
 #include <cstdint>
 #include <memory>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/keyframe_selector.hpp"
@@ -22,7 +21,8 @@ class FrameTracker {
   // `trajectory` (may be null) is given every frame that got a pose, in order, with its anchor; a
   // lost frame carries the pose the tracker predicted for it. Frames the source has no pose for
   // at all (a gap in the ground truth) are not given.
-  FrameTracker(const Config& config, std::unique_ptr<PoseProvider> poses, RunStats& stats,
+  // `selector` (see makeKeyframeSelector) picks the keyframes.
+  FrameTracker(KeyframeSelector selector, std::unique_ptr<PoseProvider> poses, RunStats& stats,
                PoseSink* trajectory = nullptr);
 
   // Estimates the frame's pose and records it. Returns true when the frame should be fused; call

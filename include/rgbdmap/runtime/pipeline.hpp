@@ -4,9 +4,9 @@
 #include <memory>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
 
 namespace rgbdmap {

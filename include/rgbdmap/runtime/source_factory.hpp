@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 

@@ -11,20 +11,12 @@
 #include "rgbdmap/runtime/frame_tracker.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
+#include "rgbdmap/runtime/run_options.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {
 
 struct RunControl;
-
-// When the tracking thread asks for a checkpoint (besides SIGUSR1 and a camera outage): after
-// `every_keyframes` new keyframes but no sooner than `min_seconds` after the previous one, or
-// every `every_seconds` while keyframes come (each 0 = off).
-struct CheckpointPolicy {
-  int every_keyframes = 0;
-  double min_seconds = 0;
-  double every_seconds = 0;
-};
 
 // Takes every frame from the queue on its own thread: gives it its pose (FrameTracker), hands
 // keyframes to the fusion thread, shows the viewer the frame and, when due, the map, and asks
@@ -45,8 +37,11 @@ class TrackingThread {
 
   // Starts the thread. `wait_for_fusion`: a keyframe waits for a fusion slot (a lossless replay,
   // whose map must not depend on timing) instead of being deferred to the next frame (live).
-  // `checkpoint` asks for one; `on_error` is told of a frame that failed (the thread goes on).
-  TrackingThread(Parts parts, bool wait_for_fusion, CheckpointPolicy policy, Checkpoint checkpoint,
+  // `policy` says when it asks for a checkpoint besides SIGUSR1 and a camera outage (after
+  // `every_keyframes` new keyframes but no sooner than `min_seconds` after the previous one, or
+  // every `every_seconds` while keyframes come; each 0 = off); `checkpoint` asks for one;
+  // `on_error` is told of a frame that failed (the thread goes on).
+  TrackingThread(Parts parts, bool wait_for_fusion, CheckpointOptions policy, Checkpoint checkpoint,
                  RunStats& stats, RunControl& control, ErrorHandler on_error);
   ~TrackingThread();  // stops the run if still going, then join()
 
@@ -61,7 +56,7 @@ class TrackingThread {
 
   Parts parts_;
   bool wait_for_fusion_;
-  CheckpointPolicy policy_;
+  CheckpointOptions policy_;
   Checkpoint checkpoint_;
   RunStats& stats_;
   RunControl& control_;

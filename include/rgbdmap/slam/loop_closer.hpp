@@ -7,7 +7,6 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/slam/place_recognition.hpp"
 #include "rgbdmap/slam/pose_graph.hpp"
@@ -26,7 +25,10 @@ namespace rgbdmap {
 class LoopCloser : public KeyframeSink {
  public:
   // lossless: block addKeyframe() while the queue is full instead of skipping the search.
-  LoopCloser(const Config& config, PoseCorrections& corrections, RunStats& stats, bool lossless);
+  // The first five as PlaceRecognition's.
+  LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+             const LoopOptions& loop, double min_depth, double max_depth,
+             PoseCorrections& corrections, RunStats& stats, bool lossless);
   ~LoopCloser() override;
 
   void addKeyframe(TrackedKeyframe keyframe) override;

@@ -4,17 +4,19 @@
 #include <optional>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/slam/loop_options.hpp"
 #include "rgbdmap/tracking/dense_aligner.hpp"
 #include "rgbdmap/tracking/image_pyramid.hpp"
 #include "rgbdmap/tracking/keyframe_sink.hpp"
 #include "rgbdmap/tracking/relocaliser.hpp"
+#include "rgbdmap/tracking/tracking_options.hpp"
 
 namespace rgbdmap {
 
 // A loop found between an earlier keyframe and the newest one, verified geometrically.
 struct LoopMeasurement {
-  int earlier = 0, later = 0;  // keyframe ids
+  int earlier = 0, later = 0;                                          // keyframe ids
   Eigen::Isometry3d later_in_earlier = Eigen::Isometry3d::Identity();  // X_earlier^-1 * X_later
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // per pixel
   int matches = 0, inliers = 0;
@@ -34,7 +36,10 @@ class PlaceRecognition {
     int verified = 0;  // passed the geometric checks
   };
 
-  explicit PlaceRecognition(const Config& config);
+  // `tracking`: the tracker's alignment settings, made finer for loops by `loop`; depth outside
+  // [min_depth, max_depth] (filter.*) is not used.
+  PlaceRecognition(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+                   const LoopOptions& loop, double min_depth, double max_depth);
 
   // Takes in the newest keyframe (its images are let go after this). Call before find().
   void add(const TrackedKeyframe& keyframe);

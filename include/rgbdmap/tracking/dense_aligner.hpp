@@ -3,8 +3,8 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-#include "rgbdmap/base/tracking_options.hpp"
 #include "rgbdmap/tracking/image_pyramid.hpp"
+#include "rgbdmap/tracking/tracking_options.hpp"
 
 namespace rgbdmap {
 

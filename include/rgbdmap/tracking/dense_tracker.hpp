@@ -3,12 +3,12 @@
 #include <deque>
 #include <memory>
 
-#include "rgbdmap/base/tracking_options.hpp"
 #include "rgbdmap/tracking/dense_aligner.hpp"
 #include "rgbdmap/tracking/image_pyramid.hpp"
 #include "rgbdmap/tracking/keyframe_sink.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "rgbdmap/tracking/relocaliser.hpp"
+#include "rgbdmap/tracking/tracking_options.hpp"
 
 namespace rgbdmap {
 

@@ -3,10 +3,11 @@
 #include <memory>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/option_keys.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/tracking/keyframe_sink.hpp"
+#include "rgbdmap/tracking/tracking_options.hpp"
 
 namespace rgbdmap {
 
@@ -67,11 +68,24 @@ class TrajectoryPoses : public PoseProvider {
   TrackingState state_ = TrackingState::kNoPose;
 };
 
-// Builds the provider named by config pose.source. Odometry needs the camera intrinsics. The
-// dense tracker hands its keyframes to `sink` when one is given (loop closure).
-std::unique_ptr<PoseProvider> makePoseProvider(const Config& config, KeyframeSink* sink = nullptr);
+// Where camera poses come from (config section "pose").
+struct PoseOptions {
+  std::string source = "auto";  // auto | groundtruth | odometry | trajectory
+  std::string trajectory;       // TUM file for source=trajectory
+  double max_gap = 0.05;        // s to the nearest ground truth or trajectory sample
+};
+
+Keys poseKeys(PoseOptions& o);
+
+// Builds the provider named by pose.source. Odometry needs the camera intrinsics and the depth
+// range used (filter.min_depth, filter.max_depth). The dense tracker hands its keyframes to
+// `sink` when one is given (loop closure).
+std::unique_ptr<PoseProvider> makePoseProvider(const PoseOptions& pose,
+                                               const TrackingOptions& tracking,
+                                               const CameraIntrinsics& camera, double min_depth,
+                                               double max_depth, KeyframeSink* sink = nullptr);
 
 // Whether makePoseProvider makes a tracker with keyframes a pose graph can be built on.
-bool tracksKeyframes(const Config& config);
+bool tracksKeyframes(const PoseOptions& pose, const TrackingOptions& tracking);
 
 }  // namespace rgbdmap

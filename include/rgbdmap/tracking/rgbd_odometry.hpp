@@ -4,7 +4,7 @@
 #include <opencv2/rgbd.hpp>
 #include <optional>
 
-#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 
 namespace rgbdmap {

@@ -4,7 +4,7 @@
 #include <utility>
 #include <vector>
 
-#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/ros/ros_options.hpp"
 
 namespace rgbdmap {
 
@@ -21,6 +21,6 @@ struct BagTopics {
 // `topics`: every topic of the bag with its message type.
 BagTopics chooseBagTopics(const std::string& bag,
                           const std::vector<std::pair<std::string, std::string>>& topics,
-                          const Config::RosTopics& keys);
+                          const RosOptions& keys);
 
 }  // namespace rgbdmap

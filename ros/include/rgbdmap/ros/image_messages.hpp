@@ -6,8 +6,8 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 

@@ -8,10 +8,10 @@
 #include <memory>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
 #include "rgbdmap/ros/bag_topics.hpp"
 #include "rgbdmap/ros/stamp_pairer.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 

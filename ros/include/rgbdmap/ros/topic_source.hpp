@@ -11,9 +11,9 @@
 #include <optional>
 #include <string>
 
-#include "rgbdmap/base/config.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
 #include "rgbdmap/ros/stamp_pairer.hpp"
+#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 

@@ -2,11 +2,12 @@
 
 #include <string>
 
+#include "rgbdmap/base/option_keys.hpp"
+
 namespace rgbdmap {
 
-// The tunables of camera tracking (config section "tracking"). They live in base so that
-// Config can hold them; the tracking layer reads them. Defaults are the measured ones (see
-// bench/track_sequence.cpp and the README's tracking table).
+// The tunables of camera tracking (config section "tracking"). Defaults are the measured ones
+// (see bench/track_sequence.cpp and the README's tracking table).
 struct TrackingOptions {
   // dense: our photometric + geometric aligner against the last keyframe; opencv_rgbd and
   // opencv_rgbd_icp: OpenCV's RgbdOdometry / RgbdICPOdometry against a reference frame.
@@ -40,5 +41,7 @@ struct TrackingOptions {
   int relocalisation_keyframes = 10;
   int relocalisation_min_inliers = 30;  // PnP RANSAC inliers a candidate needs
 };
+
+Keys trackingKeys(TrackingOptions& o);
 
 }  // namespace rgbdmap

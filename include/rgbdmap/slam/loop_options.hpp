@@ -1,11 +1,13 @@
 #pragma once
 
+#include "rgbdmap/base/option_keys.hpp"
+
 namespace rgbdmap {
 
 // The tunables of loop closure (config section "loop"): place recognition among earlier
-// keyframes, its geometric checks, the pose graph and the submaps the map is made of. They live
-// in base so that Config can hold them; the slam and mapping layers read them. Defaults are the
-// measured ones (docs/loop-closure.md).
+// keyframes, its geometric checks and the pose graph. The submaps the map is made of are the
+// mapping layer's (SubmapOptions, keys loop.submap_*). Defaults are the measured ones
+// (docs/loop-closure.md).
 struct LoopOptions {
   bool enabled = true;  // off: odometry only, one map in the odometry frame (as before loops)
 
@@ -47,12 +49,8 @@ struct LoopOptions {
   // number of independent measurements an alignment is worth (neighbouring pixels are not
   // independent, so far fewer than the pixels used).
   double edge_pixels = 50.0;
-
-  // Submaps: the map is fused into a submap anchored to a tracking keyframe; a new one starts
-  // after this many fused keyframes or this far from where the submap started.
-  int submap_keyframes = 40;
-  double submap_distance = 1.0;  // m
-  double submap_rotation = 1.0;  // rad
 };
+
+Keys loopKeys(LoopOptions& o);
 
 }  // namespace rgbdmap

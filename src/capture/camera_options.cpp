@@ -1,0 +1,28 @@
+#include "rgbdmap/capture/camera_options.hpp"
+
+namespace rgbdmap {
+
+Keys cameraKeys(CameraOptions& o) {
+  constexpr double kBig = 1e6;
+  return {
+      integer("camera.width", &o.width, 16, 8192, "image width in pixels"),
+      integer("camera.height", &o.height, 16, 8192, "image height in pixels"),
+      number("camera.fx", &o.fx, 1, kBig, "focal length x (px)"),
+      number("camera.fy", &o.fy, 1, kBig, "focal length y (px)"),
+      number("camera.cx", &o.cx, -kBig, kBig, "principal point x (px)"),
+      number("camera.cy", &o.cy, -kBig, kBig, "principal point y (px)"),
+      number("camera.k1", &o.k1, -100, 100, "radial distortion k1"),
+      number("camera.k2", &o.k2, -100, 100, "radial distortion k2"),
+      number("camera.p1", &o.p1, -100, 100, "tangential distortion p1"),
+      number("camera.p2", &o.p2, -100, 100, "tangential distortion p2"),
+      number("camera.k3", &o.k3, -100, 100, "radial distortion k3"),
+      number("camera.depth_scale", &o.depth_scale, 1e-3, kBig,
+             "depth units per metre (TUM PNG 5000, OpenNI2 1000)"),
+      // OpenNI2 sources: where the intrinsics come from.
+      choice("camera.intrinsics", &o.intrinsics, {"preset", "device"},
+             "preset: camera.fx/fy/cx/cy; device: from the OpenNI2 device's field of view or "
+             "the ROS camera_info (used anyway with the default preset and camera keys)"),
+  };
+}
+
+}  // namespace rgbdmap

@@ -1,0 +1,81 @@
+// The key tables of the mapping layer's option structs.
+#include <stdexcept>
+#include <utility>
+
+#include "rgbdmap/mapping/depth_filter.hpp"
+#include "rgbdmap/mapping/keyframe_selector.hpp"
+#include "rgbdmap/mapping/map_options.hpp"
+
+namespace rgbdmap {
+
+Keys keyframeKeys(KeyframeOptions& o) {
+  return {
+      choice("keyframe.policy", &o.policy, {"auto", "interval", "motion", "both"},
+             "interval: every N frames; motion: after moving; both: whichever comes first; auto: "
+             "motion with odometry, else interval"),
+      integer("keyframe.every_n", &o.every_n, 1, 1000000, "frames between keyframes"),
+      number("keyframe.min_translation", &o.min_translation, 0, 100,
+             "metres moved since the last keyframe that make a new one"),
+      number("keyframe.min_rotation", &o.min_rotation, 0, 3.15,
+             "radians turned since the last keyframe that make a new one"),
+  };
+}
+
+Keys filterKeys(FilterOptions& o) {
+  Keys keys = {
+      number("filter.min_depth", &o.min_depth, 0, 100, "nearest depth used (m)"),
+      number("filter.max_depth", &o.max_depth, 0.01, 100, "farthest depth used (m)"),
+      boolean("filter.undistort", &o.undistort, "undo lens distortion when the camera has it"),
+      choice("filter.outliers", &o.outliers, {"fast", "statistical", "none"},
+             "fast: flying pixels and specks on the depth image; statistical: PCL's SOR"),
+      number("filter.edge_jump", &o.edge_jump, 0.001, 1,
+             "relative depth jump to a neighbour that marks a flying pixel"),
+      integer("filter.speck_min_neighbours", &o.speck_min_neighbours, 0, 8,
+              "neighbours (of 8) with similar depth a pixel needs to be kept"),
+      boolean("filter.subsample", &o.subsample,
+              "fuse every 2nd pixel of each row and column where 2 pixels span under half a voxel"),
+      integer("filter.smooth_radius", &o.smooth_radius, 0, 10,
+              "half-size of the edge-aware inverse-depth averaging window (0 = off)"),
+      integer("filter.sor_mean_k", &o.sor_mean_k, 1, 1000,
+              "statistical outlier removal: neighbours"),
+      number("filter.sor_stddev", &o.sor_stddev, 0, 100, "statistical outlier removal: sigma"),
+  };
+  // Either end of the range may be set first; the range must stay non-empty.
+  for (Key& k : keys)
+    if (k.name == "filter.min_depth" || k.name == "filter.max_depth")
+      k = checked(std::move(k), [&o] {
+        if (o.min_depth >= o.max_depth)
+          throw std::invalid_argument("filter.min_depth must be below filter.max_depth");
+      });
+  return keys;
+}
+
+Keys mapKeys(MapOptions& o) {
+  return {
+      number("map.voxel_size", &o.voxel_size, 0.001, 10, "voxel edge (m)"),
+      integer("map.min_observations", &o.min_observations, 1, 255,
+              "voxels seen in fewer frames are left out of written maps"),
+      number("map.truncation", &o.truncation, 0.001, 10,
+             "narrowest band around a measured surface that fusion updates (m)"),
+      number("map.truncation_sigmas", &o.truncation_sigmas, 0, 100,
+             "band around a measured surface in units of its depth noise sigma(z), if wider"),
+      number("map.min_incidence_cosine", &o.min_incidence_cosine, 0.01, 1,
+             "distances along a grazing line of sight are scaled by cos(incidence), clamped at "
+             "this (1 = distances along the ray)"),
+      integer("map.fusion_threads", &o.fusion_threads, 0, 256,
+              "threads that update voxels (0 = every core when replaying, 1 with a live camera)"),
+  };
+}
+
+Keys submapKeys(SubmapOptions& o) {
+  return {
+      integer("loop.submap_keyframes", &o.submap_keyframes, 1, 1000000,
+              "with loop closure: fused keyframes per submap of the map"),
+      number("loop.submap_distance", &o.submap_distance, 0.01, 1000,
+             "with loop closure: a new submap after the camera moved this far from its start (m)"),
+      number("loop.submap_rotation", &o.submap_rotation, 0.01, 3.15,
+             "with loop closure: a new submap after the camera turned this far (rad)"),
+  };
+}
+
+}  // namespace rgbdmap
