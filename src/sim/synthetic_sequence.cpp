@@ -249,21 +249,13 @@ void SyntheticRenderer::render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv
   });
 }
 
-SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
-                                                const SyntheticScene& scene,
-                                                const SyntheticSequenceOptions& options) {
-  namespace fs = std::filesystem;
-  validate(options);
-  const auto start = std::chrono::steady_clock::now();
-  std::error_code ec;
-  for (const char* sub : {"rgb", "depth"}) {
-    fs::create_directories(fs::path(folder) / sub, ec);
-    if (ec) throw InputError(folder + "/" + sub + ": cannot create folder (" + ec.message() + ")");
-  }
+namespace {
 
-  const double duration = (options.frames - 1) / options.fps;
-  const std::unique_ptr<CameraPath> camera_path = makeCameraPath(scene.room(), options, duration);
-  const CameraPath& path = *camera_path;
+// groundtruth.txt: the analytic path sampled at options.groundtruth_rate, a little beyond the
+// frames at both ends; refused where the path comes too close to a surface.
+void writeGroundTruth(const std::string& folder, const SyntheticScene& scene,
+                      const CameraPath& path, double duration,
+                      const SyntheticSequenceOptions& options) {
   const int gt_margin = 5;  // samples of ground truth before the first and after the last frame
   const int gt_samples = static_cast<int>(std::ceil(duration * options.groundtruth_rate));
   for (int k = -gt_margin; k <= gt_samples + gt_margin; ++k) {
@@ -287,6 +279,70 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   }
   groundtruth.flush();
   if (!groundtruth) throw InputError(folder + "/groundtruth.txt: cannot write");
+}
+
+// What the sensor measures of frame `frame`'s ideal depth `depth` (metres, from the renderer):
+// 16-bit depth in `depth16` with the configured errors and noise, the colour noise applied to
+// `color` in place, and in `visible` the pixels an ideal sensor measures (the reference surface).
+void measure(const cv::Mat& depth, const cv::Mat& incidence_cos, int frame,
+             const SyntheticSequenceOptions& options, cv::Mat& color, cv::Mat& depth16,
+             cv::Mat& visible) {
+  const CameraIntrinsics& camera = options.camera;
+  const int i = frame;
+  const float min_cos = static_cast<float>(std::cos(options.max_incidence_deg * M_PI / 180.0));
+  cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      std::mt19937_64 random(rowSeed(options.noise_seed, i, v));
+      std::normal_distribution<float> gauss(0.0f, 1.0f);
+      std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+      const auto* z_row = depth.ptr<float>(v);
+      const auto* cos_row = incidence_cos.ptr<float>(v);
+      auto* out_row = depth16.ptr<std::uint16_t>(v);
+      auto* visible_row = visible.ptr<unsigned char>(v);
+      auto* color_row = color.ptr<cv::Vec3b>(v);
+      for (int u = 0; u < camera.width; ++u) {
+        const double z = z_row[u];
+        // The reference surface is what an ideal sensor measures: in range, not grazing.
+        const bool measurable =
+            z >= options.min_range && z <= options.max_range && cos_row[u] >= min_cos;
+        visible_row[u] = measurable ? 1 : 0;
+        double measured = measurable ? z * (1.0 + options.depth_scale_error) : 0.0;
+        if (options.noise) {
+          // Draw every random number for every pixel so the stream does not depend on hits.
+          const double n = gauss(random);
+          const bool dropped = uniform(random) < options.dropout;
+          for (int c = 0; c < 3; ++c) {
+            const double value = color_row[u][c] + options.color_noise * gauss(random);
+            color_row[u][c] = static_cast<unsigned char>(std::clamp(std::lround(value), 0l, 255l));
+          }
+          if (measured > 0.0) measured += kinectDepthSigma(z) * n;
+          if (dropped || measured < options.min_range || measured > options.max_range)
+            measured = 0.0;
+        }
+        out_row[u] = static_cast<std::uint16_t>(std::lround(measured * options.depth_scale));
+      }
+    }
+  });
+}
+
+}  // namespace
+
+SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
+                                                const SyntheticScene& scene,
+                                                const SyntheticSequenceOptions& options) {
+  namespace fs = std::filesystem;
+  validate(options);
+  const auto start = std::chrono::steady_clock::now();
+  std::error_code ec;
+  for (const char* sub : {"rgb", "depth"}) {
+    fs::create_directories(fs::path(folder) / sub, ec);
+    if (ec) throw InputError(folder + "/" + sub + ": cannot create folder (" + ec.message() + ")");
+  }
+
+  const double duration = (options.frames - 1) / options.fps;
+  const std::unique_ptr<CameraPath> camera_path = makeCameraPath(scene.room(), options, duration);
+  const CameraPath& path = *camera_path;
+  writeGroundTruth(folder, scene, path, duration, options);
 
   std::ofstream rgb_list(folder + "/rgb.txt"), depth_list(folder + "/depth.txt");
   rgb_list << "# color images (rgbdmap synth)\n# timestamp filename\n";
@@ -303,7 +359,6 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   cv::Mat depth, color, incidence_cos, hits;
   cv::Mat depth16(camera.height, camera.width, CV_16UC1);
   cv::Mat visible(camera.height, camera.width, CV_8UC1);
-  const float min_cos = static_cast<float>(std::cos(options.max_incidence_deg * M_PI / 180.0));
   std::size_t valid_pixels = 0;
   std::mt19937_64 stamp_random(options.seed ^ 0x5EEDull);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -317,40 +372,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     const double gain = 1.0 + options.brightness_drift * std::sin(2.0 * M_PI * t / 6.0);
     if (gain != 1.0) color.convertTo(color, -1, gain);
 
-    cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
-      for (int v = rows.start; v < rows.end; ++v) {
-        std::mt19937_64 random(rowSeed(options.noise_seed, i, v));
-        std::normal_distribution<float> gauss(0.0f, 1.0f);
-        std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-        const auto* z_row = depth.ptr<float>(v);
-        const auto* cos_row = incidence_cos.ptr<float>(v);
-        auto* out_row = depth16.ptr<std::uint16_t>(v);
-        auto* visible_row = visible.ptr<unsigned char>(v);
-        auto* color_row = color.ptr<cv::Vec3b>(v);
-        for (int u = 0; u < camera.width; ++u) {
-          const double z = z_row[u];
-          // The reference surface is what an ideal sensor measures: in range, not grazing.
-          const bool measurable =
-              z >= options.min_range && z <= options.max_range && cos_row[u] >= min_cos;
-          visible_row[u] = measurable ? 1 : 0;
-          double measured = measurable ? z * (1.0 + options.depth_scale_error) : 0.0;
-          if (options.noise) {
-            // Draw every random number for every pixel so the stream does not depend on hits.
-            const double n = gauss(random);
-            const bool dropped = uniform(random) < options.dropout;
-            for (int c = 0; c < 3; ++c) {
-              const double value = color_row[u][c] + options.color_noise * gauss(random);
-              color_row[u][c] =
-                  static_cast<unsigned char>(std::clamp(std::lround(value), 0l, 255l));
-            }
-            if (measured > 0.0) measured += kinectDepthSigma(z) * n;
-            if (dropped || measured < options.min_range || measured > options.max_range)
-              measured = 0.0;
-          }
-          out_row[u] = static_cast<std::uint16_t>(std::lround(measured * options.depth_scale));
-        }
-      }
-    });
+    measure(depth, incidence_cos, i, options, color, depth16, visible);
     valid_pixels += static_cast<std::size_t>(cv::countNonZero(depth16));
     for (int v = 0; v < camera.height; ++v) {
       const auto* visible_row = visible.ptr<unsigned char>(v);
