@@ -27,17 +27,8 @@ CaptureThread::CaptureThread(FrameSource& source, FrameQueue& queue, RunStats& s
       stats_(stats),
       control_(control),
       on_error_(std::move(on_error)),
-      thread_([this] { run(); }) {}
-
-CaptureThread::~CaptureThread() {
-  // Still running only when the run is left by an exception: stop it rather than wait for the
-  // source to end.
-  if (thread_.joinable()) control_.stop.store(true);
-  join();
-}
-
-void CaptureThread::join() {
-  if (thread_.joinable()) thread_.join();
+      thread_(control) {
+  thread_.start([this] { run(); });
 }
 
 void CaptureThread::run() {

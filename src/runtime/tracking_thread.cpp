@@ -28,17 +28,8 @@ TrackingThread::TrackingThread(Parts parts, bool wait_for_fusion, CheckpointOpti
       control_(control),
       on_error_(std::move(on_error)),
       last_checkpoint_(steadySeconds()),
-      thread_([this] { run(); }) {}
-
-TrackingThread::~TrackingThread() {
-  // Still running only when the run is left by an exception: stop it rather than wait for the
-  // source to end.
-  if (thread_.joinable()) control_.stop.store(true);
-  join();
-}
-
-void TrackingThread::join() {
-  if (thread_.joinable()) thread_.join();
+      thread_(control) {
+  thread_.start([this] { run(); });
 }
 
 void TrackingThread::run() {

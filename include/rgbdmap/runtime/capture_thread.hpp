@@ -3,11 +3,11 @@
 #include <cstdint>
 #include <functional>
 #include <string>
-#include <thread>
 
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
+#include "rgbdmap/runtime/run_thread.hpp"
 
 namespace rgbdmap {
 
@@ -25,9 +25,7 @@ class CaptureThread {
   // Starts the thread. `on_error` is called once, from the thread, with what made it stop.
   CaptureThread(FrameSource& source, FrameQueue& queue, RunStats& stats, RunControl& control,
                 ErrorHandler on_error);
-  ~CaptureThread();  // stops the run if still going, then join()
-
-  void join();
+  void join() { thread_.join(); }
 
  private:
   void run();
@@ -42,7 +40,7 @@ class CaptureThread {
   ErrorHandler on_error_;
   std::uint64_t index_ = 0;                       // the next frame's number
   std::uint64_t index_at_outage_checkpoint_ = 0;  // index_ when the last outage checkpointed
-  std::thread thread_;
+  RunThread thread_;                              // last: started once the members above are ready
 };
 
 }  // namespace rgbdmap

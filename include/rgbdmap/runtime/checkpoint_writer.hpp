@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "rgbdmap/mapping/map_cloud.hpp"
-#include "rgbdmap/runtime/trajectory_stream.hpp"
 #include "rgbdmap/mapping/triangle_mesh.hpp"
+#include "rgbdmap/runtime/trajectory_stream.hpp"
 
 namespace rgbdmap {
 

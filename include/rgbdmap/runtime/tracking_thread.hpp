@@ -4,7 +4,6 @@
 #include <cstdint>
 #include <functional>
 #include <string>
-#include <thread>
 
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
@@ -12,6 +11,7 @@
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
 #include "rgbdmap/runtime/run_options.hpp"
+#include "rgbdmap/runtime/run_thread.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {
@@ -43,11 +43,10 @@ class TrackingThread {
   // `on_error` is told of a frame that failed (the thread goes on).
   TrackingThread(Parts parts, bool wait_for_fusion, CheckpointOptions policy, Checkpoint checkpoint,
                  RunStats& stats, RunControl& control, ErrorHandler on_error);
-  ~TrackingThread();  // stops the run if still going, then join()
 
   // Set once every frame is taken and the last checkpoint request made.
   bool done() const { return done_.load(); }
-  void join();
+  void join() { thread_.join(); }
 
  private:
   void run();
@@ -64,7 +63,7 @@ class TrackingThread {
   double last_checkpoint_;  // steady-clock seconds
   std::uint64_t keyframes_at_checkpoint_ = 0;
   std::atomic<bool> done_{false};
-  std::thread thread_;
+  RunThread thread_;  // last: started once the members above are ready
 };
 
 }  // namespace rgbdmap

@@ -50,7 +50,7 @@ class TrajectoryStream : public PoseSink {
   const PoseCorrections* corrections_;
   mutable std::mutex mutex_;
   std::vector<Entry> pending_;  // recorded, not yet written
-  bool started_ = false;  // the first persist() truncates what an earlier run left
+  bool started_ = false;        // the first persist() truncates what an earlier run left
 };
 
 }  // namespace rgbdmap

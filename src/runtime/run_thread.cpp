@@ -1,0 +1,12 @@
+#include "rgbdmap/runtime/run_thread.hpp"
+
+#include "rgbdmap/runtime/pipeline.hpp"
+
+namespace rgbdmap {
+
+RunThread::~RunThread() {
+  if (thread_.joinable()) control_.stop.store(true);
+  join();
+}
+
+}  // namespace rgbdmap
