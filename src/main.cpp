@@ -3,7 +3,6 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <csignal>
 #include <fstream>
 #include <memory>
 
@@ -109,9 +108,6 @@ int main(int argc, char** argv) {
   // Before any thread exists, so all inherit the mask (the `rgbdmap` launcher blocked the signals
   // before this program was even loaded: none can kill it during start-up).
   rgbdmap::RunSignals::block();
-  // A file-size limit (ulimit -f) must fail the write with EFBIG, reported like a full disk,
-  // instead of killing the process.
-  std::signal(SIGXFSZ, SIG_IGN);
   // spdlog creates its registry on first use: do it here, before any thread can log.
   spdlog::default_logger_raw();
   rgbdmap::RunControl control;

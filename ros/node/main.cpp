@@ -7,7 +7,6 @@
 #include <spdlog/spdlog.h>
 #include <std_srvs/Trigger.h>
 
-#include <csignal>
 #include <fstream>
 #include <thread>
 
@@ -154,7 +153,6 @@ int main(int argc, char** argv) {
   // Before any thread exists, so that all inherit the mask: signals are taken by RunSignals'
   // thread, never by a handler inside ROS or mapping code. ROS's own SIGINT handler is off.
   RunSignals::block();
-  std::signal(SIGXFSZ, SIG_IGN);
   spdlog::default_logger_raw();
   ros::init(argc, argv, "rgbdmap", ros::init_options::NoSigintHandler);
   RunControl control;

@@ -25,6 +25,9 @@ sigset_t runSignals() {
 void RunSignals::block() {
   const sigset_t set = runSignals();
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  // A file-size limit (ulimit -f) must fail the write with EFBIG, reported like a full disk,
+  // instead of killing the process.
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 void RunSignals::unblock() {

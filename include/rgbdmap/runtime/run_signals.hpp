@@ -44,6 +44,7 @@ class RunSignals {
 
   // SIGINT, SIGTERM and SIGUSR1 in the calling thread: blocked (before any thread exists), or
   // unblocked again (for commands that keep the default actions: Ctrl-C ends them at once).
+  // block() also makes a file-size limit fail writes (EFBIG) rather than kill the process.
   static void block();
   static void unblock();
 
