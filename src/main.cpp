@@ -20,7 +20,8 @@
 
 namespace {
 
-struct MapOptions {
+// What the command line asks of a mapping run (config keys come through --config and --set).
+struct CommandLine {
   std::string config_file;
   std::string source = "";
   std::string out = "map.pcd";
@@ -42,7 +43,7 @@ bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   return true;
 }
 
-int runMapping(const MapOptions& o, rgbdmap::RunControl& control, rgbdmap::RunSignals& signals) {
+int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunSignals& signals) {
   using namespace rgbdmap;
   Config config;
   if (o.list_keys) {
@@ -114,7 +115,7 @@ int main(int argc, char** argv) {
   auto signals = std::make_unique<rgbdmap::RunSignals>(control);
   CLI::App app{"rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};
   app.set_version_flag("--version", RGBDMAP_VERSION);
-  MapOptions o;
+  CommandLine o;
   app.add_option("-c,--config", o.config_file,
                  "YAML config: a preset name (tum_fr1, kinect_v1, ...) or a file");
   app.add_option("-s,--source", o.source, rgbdmap::sourceUsage());
