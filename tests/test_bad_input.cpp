@@ -298,5 +298,24 @@ TEST(BadInput, GarbageMapFilesAreNamedNotCrashed) {
   }
 }
 
+TEST(BadInput, SynthRefusesARoomSizeItCannotFurnish) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  EXPECT_NE(
+      test::run(test::binary() + " synth --frames 2 --out " + dir + "/room --room 6x2x3", &output),
+      0);
+  EXPECT_NE(output.find("--room"), std::string::npos) << output;
+}
+
+TEST(BadInput, SynthNamesABadSceneFile) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  EXPECT_NE(test::run(test::binary() + " synth --frames 2 --out " + dir + "/room --scene " + dir +
+                          "/missing.yaml",
+                      &output),
+            0);
+  EXPECT_NE(output.find(dir + "/missing.yaml"), std::string::npos) << output;
+}
+
 }  // namespace
 }  // namespace rgbdmap
