@@ -1,13 +1,11 @@
 // The parts of loop closure that need no camera: the pose graph pulling a drifted loop shut,
-// corrections applied to anchored poses, and submaps merged into one layer.
+// corrections applied to anchored poses.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <random>
 
-#include "rgbdmap/mapping/point_merger.hpp"
-#include "rgbdmap/mapping/surface_cloud.hpp"
 #include "rgbdmap/slam/pose_graph.hpp"
 #include "rgbdmap/tracking/anchored_trajectory.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
@@ -176,91 +174,6 @@ TEST(PoseCorrections, ASnapshotStaysAsTakenWhileANewTableIsPublished) {
   EXPECT_NEAR(old.of(0).translation().x(), 1.0, 1e-12);
   EXPECT_NEAR(corrections.snapshot().of(0).translation().x(), 2.0, 1e-12);
   EXPECT_NE(old.version, corrections.snapshot().version);
-}
-
-std::vector<VoxelMap::SurfacePoint> wall(float x, std::uint8_t grey, float weight) {
-  std::vector<VoxelMap::SurfacePoint> points;
-  for (int i = 0; i < 50; ++i)
-    for (int j = 0; j < 50; ++j) {
-      VoxelMap::SurfacePoint p;
-      p.position = Eigen::Vector3f(x, 0.01f * i + 0.005f, 0.01f * j + 0.005f);
-      p.weight = weight;
-      p.r = p.g = p.b = grey;
-      points.push_back(p);
-    }
-  return points;
-}
-
-TEST(PointMerger, AlignedSubmapsOfOneWallGiveOneLayer) {
-  PointMerger merger(0.01);
-  // Two submaps saw the same wall at x = 1.003; the second one's frame is offset by 0.2 m,
-  // which its pose takes back.
-  merger.add(SurfaceCloud(wall(1.003f, 100, 1.0f)), Eigen::Isometry3d::Identity());
-  merger.add(SurfaceCloud(wall(0.803f, 200, 3.0f)), pose(0.2, 0, 0, 0));
-  EXPECT_EQ(merger.size(), 2500u);
-  MapCloud cloud;
-  merger.extract(cloud);
-  ASSERT_EQ(cloud.size(), 2500u);
-  for (const auto& p : cloud.points) {
-    EXPECT_NEAR(p.x, 1.003f, 1e-5f);
-    EXPECT_EQ(p.r, 175);  // weighted by what each submap fused: (100 + 3 * 200) / 4
-  }
-  EXPECT_EQ(cloud.width, 2500u);
-}
-
-TEST(PointMerger, MisalignedSubmapsStayTwoLayersAndOrderIsStable) {
-  PointMerger merger(0.01);
-  merger.add(SurfaceCloud(wall(1.003f, 100, 1.0f)), Eigen::Isometry3d::Identity());
-  merger.add(SurfaceCloud(wall(1.003f, 100, 1.0f)), pose(0.05, 0, 0, 0));
-  MapCloud first;
-  merger.extract(first);
-  EXPECT_EQ(first.size(), 5000u);
-  PointMerger again(0.01);
-  again.add(SurfaceCloud(wall(1.003f, 100, 1.0f)), Eigen::Isometry3d::Identity());
-  again.add(SurfaceCloud(wall(1.003f, 100, 1.0f)), pose(0.05, 0, 0, 0));
-  MapCloud second;
-  again.extract(second);
-  ASSERT_EQ(second.size(), first.size());
-  for (std::size_t i = 0; i < first.size(); ++i) EXPECT_EQ(first[i].x, second[i].x);
-}
-
-TEST(PointMerger, PointsOutsideTheKeyRangeAreLeftOut) {
-  PointMerger merger(0.01);
-  std::vector<VoxelMap::SurfacePoint> points = wall(1.0f, 10, 1.0f);
-  points[0].position.x() = 1e9f;
-  points[1].position.x() = std::nanf("");
-  merger.add(SurfaceCloud(points), Eigen::Isometry3d::Identity());
-  EXPECT_EQ(merger.size(), 2498u);
-}
-
-TEST(SurfaceCloud, KeepsPointsOfATenMetreSubmapTo0_15Millimetres) {
-  std::vector<VoxelMap::SurfacePoint> points;
-  std::mt19937 random(3);
-  std::uniform_real_distribution<float> coordinate(-5.0f, 5.0f);
-  for (int i = 0; i < 1000; ++i) {
-    VoxelMap::SurfacePoint p;
-    p.position = Eigen::Vector3f(coordinate(random), coordinate(random), 0.5f * coordinate(random));
-    p.weight = 0.25f * static_cast<float>(i % 400);
-    p.r = static_cast<std::uint8_t>(i % 256);
-    p.g = 7;
-    p.b = 200;
-    points.push_back(p);
-  }
-  const SurfaceCloud cloud(points);
-  ASSERT_EQ(cloud.size(), points.size());
-  EXPECT_LE(cloud.memoryBytes(), points.size() * 12);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const VoxelMap::SurfacePoint p = cloud[i];
-    EXPECT_LT((p.position - points[i].position).norm(), 1.5e-4f);
-    EXPECT_NEAR(p.weight, std::max(points[i].weight, 1.0f / 16), 1.0f / 32);
-    EXPECT_EQ(p.r, points[i].r);
-    EXPECT_EQ(p.b, 200);
-  }
-  // One point far away would make the grid coarse: such a cloud is kept exactly.
-  points[5].position.x() = 1e6f;
-  const SurfaceCloud wide(points);
-  ASSERT_EQ(wide.size(), points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) EXPECT_EQ(wide[i].position, points[i].position);
 }
 
 }  // namespace

@@ -10,10 +10,6 @@
 #include <sstream>
 
 #include "rgbdmap/capture/trajectory.hpp"
-#include "rgbdmap/capture/tum_sequence.hpp"
-#include "rgbdmap/mapping/mapper.hpp"
-#include "rgbdmap/runtime/config.hpp"
-#include "rgbdmap/tracking/pose_corrections.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -173,37 +169,6 @@ TEST(Walk, ClosingLoopsRoundARoomKeepsEveryReportedLoopTrue) {
   EXPECT_GE(on.precision, 0.995);
   EXPECT_GE(on.precision, off.precision);
   EXPECT_GE(checkReportedLoops(on.log, sequence), 1) << on.log;
-}
-
-// A camera at rest, fused frame after frame with loop closure on, keeps one submap: every frame
-// is tracked against the same keyframe, so splitting would only copy the same surface again and
-// again (a soak at rest grew 10 MB a minute). Once tracking moves on to a new keyframe, the
-// submap closes as before.
-TEST(Submaps, ACameraAtRestKeepsOneSubmapAndBoundedMemory) {
-  const std::string folder = test::tumDir("rgbd_dataset_freiburg1_xyz");
-  Config config;
-  config.loadPreset(TumSequence::presetForFolder(folder));
-  TumSequence sequence(folder);
-  Frame frame;
-  std::string error;
-  ASSERT_TRUE(sequence.load(0, frame, error)) << error;
-  RunStats stats;
-  PoseCorrections corrections;
-  Mapper mapper(config.camera, config.filter, config.map, config.submaps, stats, &corrections);
-  frame.anchor = 0;
-  std::size_t bytes_after_first_submap_length = 0;
-  const int long_rest = 3 * config.submaps.submap_keyframes;
-  for (int i = 0; i < long_rest; ++i) {
-    frame.timestamp += 1.0 / 30;
-    mapper.fuse(frame);
-    if (i == config.submaps.submap_keyframes)
-      bytes_after_first_submap_length = mapper.memoryBytes();
-  }
-  EXPECT_EQ(mapper.submaps(), 1u);
-  EXPECT_EQ(mapper.memoryBytes(), bytes_after_first_submap_length);
-  frame.anchor = 1;  // tracking took a new keyframe
-  mapper.fuse(frame);
-  EXPECT_EQ(mapper.submaps(), 2u);
 }
 
 }  // namespace

@@ -16,7 +16,6 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/mapping/mesh_extractor.hpp"
-#include "rgbdmap/mapping/mesh_merger.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 #include "test_support.hpp"
 
@@ -164,42 +163,6 @@ TEST(MeshExtractor, NoCurtainWhereTheFieldJumps) {
       fieldMap([](const Eigen::Vector3f& p) { return 2.0f * (0.0537f - p.x()); },
                {-0.1f, -0.1f, -0.1f}, {0.2f, 0.1f, 0.1f});
   EXPECT_FALSE(extractMesh(oblique).empty());
-}
-
-TEST(MeshMerger, OverlappingSubmapsGiveTheSurfaceOnceAndDisjointOnesAll) {
-  const TriangleMesh plane =
-      extractMesh(fieldMap([](const Eigen::Vector3f& p) { return p.z() - 0.0537f; },
-                           {-0.2f, -0.2f, -0.1f}, {0.2f, 0.2f, 0.2f}));
-  ASSERT_GT(plane.triangles.size(), 1000u);
-  auto shifted = [](float x, float z) {
-    return Eigen::Isometry3d(Eigen::Translation3d(x, 0.0, z));
-  };
-  // The same wall seen by two submaps, 3 mm apart after correction: kept once (the first
-  // added), but for a few triangles at the border of the second.
-  MeshMerger overlapping(kVoxel);
-  overlapping.add(plane, Eigen::Isometry3d::Identity());
-  overlapping.add(plane, shifted(0.0f, 0.003f));
-  const TriangleMesh& once = overlapping.mesh();
-  EXPECT_GE(once.triangles.size(), plane.triangles.size());
-  EXPECT_LE(once.triangles.size(), plane.triangles.size() * 21 / 20);
-  // Submaps that do not overlap are all kept, vertex for vertex.
-  MeshMerger disjoint(kVoxel);
-  disjoint.add(plane, Eigen::Isometry3d::Identity());
-  disjoint.add(plane, shifted(1.0f, 0.0f));
-  EXPECT_EQ(disjoint.mesh().triangles.size(), 2 * plane.triangles.size());
-  EXPECT_EQ(disjoint.mesh().vertices.size(), 2 * plane.vertices.size());
-  for (std::size_t i = 0; i < plane.triangles.size(); ++i) {
-    const TriangleMesh::Triangle& moved = disjoint.mesh().triangles[plane.triangles.size() + i];
-    for (int k = 0; k < 3; ++k)
-      ASSERT_TRUE(disjoint.mesh().vertices[moved[k]].isApprox(
-          plane.vertices[plane.triangles[i][k]] + Eigen::Vector3f(1.0f, 0.0f, 0.0f), 1e-6f));
-  }
-  // No vertex is left that no triangle uses.
-  std::vector<bool> used(once.vertices.size(), false);
-  for (const TriangleMesh::Triangle& t : once.triangles)
-    for (const std::uint32_t v : t) used.at(v) = true;
-  EXPECT_EQ(std::count(used.begin(), used.end(), false), 0);
-  EXPECT_EQ(once.colours.size(), once.vertices.size());
 }
 
 TEST(PlyFile, RoundTripIsExactAndWritesAreByteIdentical) {

@@ -63,11 +63,11 @@ void expectSameCloud(const MapCloud& a, const MapCloud& b) {
 TEST(PipelineFusion, FusedOnItsThreadGivesTheSameMapAsFusedInTurn) {
   const Fixture f = loadFrames(6);
   RunStats sequential_stats, threaded_stats;
-  Mapper sequential(f.config.camera, f.config.filter, f.config.map, f.config.submaps,
+  Mapper sequential(f.config.camera, f.config.filter, f.config.map, f.config.refusion,
                     sequential_stats);
   for (const Frame& frame : f.frames) sequential.fuse(frame);
 
-  Mapper threaded(f.config.camera, f.config.filter, f.config.map, f.config.submaps, threaded_stats);
+  Mapper threaded(f.config.camera, f.config.filter, f.config.map, f.config.refusion, threaded_stats);
   {
     FusionThread fusion(threaded, 2, 640, 480, nullptr);
     for (const Frame& frame : f.frames) ASSERT_TRUE(fusion.submit(frame, true));
@@ -83,9 +83,9 @@ TEST(PipelineFusion, TheMapIsTheSameWhateverTheFusionThreads) {
   Fixture f = loadFrames(6);
   f.config.map.fusion_threads = 1;
   RunStats one_stats, three_stats;
-  Mapper one(f.config.camera, f.config.filter, f.config.map, f.config.submaps, one_stats);
+  Mapper one(f.config.camera, f.config.filter, f.config.map, f.config.refusion, one_stats);
   f.config.map.fusion_threads = 3;  // more than the CI machine's cores: tasks interleave
-  Mapper three(f.config.camera, f.config.filter, f.config.map, f.config.submaps, three_stats);
+  Mapper three(f.config.camera, f.config.filter, f.config.map, f.config.refusion, three_stats);
   for (const Frame& frame : f.frames) {
     one.fuse(frame);
     three.fuse(frame);
@@ -118,7 +118,7 @@ TEST(WorkerPool, RunsEveryTaskOnceOnAllItsThreadsAndRethrowsTheFirstError) {
 TEST(PipelineFusion, BusySlotsRefuseALiveKeyframeAtOnceAndLoseNothingAccepted) {
   const Fixture f = loadFrames(8);
   RunStats stats;
-  Mapper mapper(f.config.camera, f.config.filter, f.config.map, f.config.submaps, stats);
+  Mapper mapper(f.config.camera, f.config.filter, f.config.map, f.config.refusion, stats);
   FusionThread fusion(mapper, 2, 640, 480, nullptr);
   // Hold the fusion thread inside a map task, as a slow keyframe would.
   std::atomic<bool> inside{false}, release{false};
@@ -146,7 +146,7 @@ TEST(PipelineFusion, BusySlotsRefuseALiveKeyframeAtOnceAndLoseNothingAccepted) {
 TEST(PipelineFusion, MapTasksRunBetweenKeyframesOnTheFusionThread) {
   const Fixture f = loadFrames(4);
   RunStats stats;
-  Mapper mapper(f.config.camera, f.config.filter, f.config.map, f.config.submaps, stats);
+  Mapper mapper(f.config.camera, f.config.filter, f.config.map, f.config.refusion, stats);
   FusionThread fusion(mapper, 4, 640, 480, nullptr);
   std::atomic<bool> done{false};
   std::size_t keyframes_seen = 99;

@@ -1,5 +1,5 @@
 // The loop thread inside the running pipeline, short enough for ThreadSanitizer: tracking hands
-// keyframes over, the graph publishes corrections while fusion merges submaps for checkpoints,
+// keyframes over, the graph publishes corrections while fusion re-fuses the map and snapshots it for checkpoints,
 // and the final map and trajectories take the last corrections. (Accuracy on longer sequences:
 // test_loop_mapping.cpp.)
 #include <gtest/gtest.h>
@@ -18,7 +18,7 @@ TEST(PipelineLoopThread, ClosesLoopsWhileCheckpointingAndFinishesWithTheCorrecti
   const std::string sequence = test::sharedSynthetic("short_orbit", kShortOrbit);
   const std::string dir = test::freshDir();
   std::string log;
-  // A checkpoint every 5 keyframes: snapshots merge submaps while corrections change.
+  // A checkpoint every 5 keyframes: snapshots while corrections change and the map follows them.
   ASSERT_EQ(
       test::run(test::binary() + " --source tum:" + sequence + " --out " + dir +
                     "/map.pcd --rate max -q --no-render --set pose.source=odometry"
@@ -30,6 +30,7 @@ TEST(PipelineLoopThread, ClosesLoopsWhileCheckpointingAndFinishesWithTheCorrecti
   const std::string stats = test::readFile(dir + "/stats.json");
   // Measured (release): 16 loops, ATE 0.12 cm.
   EXPECT_GE(test::jsonNumber(stats, "loops_accepted"), 1) << log;
+  EXPECT_GE(test::jsonNumber(stats, "map_refusions"), 1) << stats;
   EXPECT_EQ(test::jsonNumber(stats, "frames_processed"), 130);
   EXPECT_GT(test::jsonNumber(stats, "checkpoints_written"), 3);
   EXPECT_NE(log.find("loop closed: keyframe"), std::string::npos) << log;

@@ -66,13 +66,15 @@ std::string RunStats::toJson() const {
       << "  \"loops_accepted\": " << loops_accepted << ",\n"
       << "  \"loops_rejected\": " << loops_rejected << ",\n"
       << "  \"loop_keyframes_unsearched\": " << loop_keyframes_unsearched << ",\n"
+      << "  \"map_refusions\": " << map_refusions << ",\n"
+      << "  \"keyframes_refused\": " << keyframes_refused << ",\n"
       << "  \"wall_seconds\": " << wall_seconds << ",\n"
       << "  \"frames_per_second\": "
       << (wall_seconds > 0 ? static_cast<double>(frames_processed) / wall_seconds : 0.0) << ",\n"
       << "  \"peak_rss_mb\": " << peak_rss_mb << ",\n"
       << "  \"mesh_triangles\": " << mesh_triangles << ",\n"
-      << "  \"mesh_memory_mb\": " << mesh_memory_mb << ",\n"
       << "  \"map_memory_mb\": " << map_memory_mb << ",\n"
+      << "  \"kept_keyframes_mb\": " << kept_keyframes_mb << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);
   latency("queue_wait", queue_latency, false);
@@ -84,6 +86,7 @@ std::string RunStats::toJson() const {
   latency("integrate", integrate_latency, false);
   latency("loop", loop_latency, false);
   latency("optimise", optimise_latency, false);
+  latency("refuse", refuse_latency, false);
   latency("mesh_extract", mesh_extract_latency, false);
   latency("mesh_write", mesh_write_latency, true);
   out << "  }\n}\n";

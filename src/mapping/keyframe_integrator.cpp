@@ -43,7 +43,8 @@ KeyframeIntegrator::KeyframeIntegrator(const CameraIntrinsics& camera, const Fil
   if (filter.undistort && camera.hasDistortion()) lens_.emplace(camera);
 }
 
-void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {
+void KeyframeIntegrator::integrate(const Frame& frame, const Eigen::Isometry3d& pose,
+                                   VoxelMap& map, RunStats& stats) {
   const auto start = std::chrono::steady_clock::now();
   filter_.apply(frame.depth, depth_, scratch_);  // the frame stays untouched
   smoother_.apply(depth_, smoothing_);
@@ -62,7 +63,7 @@ void KeyframeIntegrator::integrate(const Frame& frame, VoxelMap& map, RunStats& 
   stats.project_latency.record(secondsSince(project_start));
 
   const auto fuse_start = std::chrono::steady_clock::now();
-  tsdf_.integrate(*depth, frame.color, frame.pose, map, &pool_, color_pixel_of);
+  tsdf_.integrate(*depth, frame.color, pose, map, &pool_, color_pixel_of);
   stats.fuse_latency.record(secondsSince(fuse_start));
   stats.integrate_latency.record(secondsSince(start));
 }

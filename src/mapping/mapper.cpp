@@ -1,10 +1,10 @@
 #include "rgbdmap/mapping/mapper.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 
 #include "rgbdmap/mapping/mesh_extractor.hpp"
-#include "rgbdmap/mapping/mesh_merger.hpp"
-#include "rgbdmap/mapping/point_merger.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -19,111 +19,138 @@ constexpr std::chrono::milliseconds kCountPointsEvery{1000};
 constexpr std::uint64_t kPruneEvery = 10;
 constexpr std::uint64_t kPruneIdleKeyframes = 30;
 constexpr float kPruneClearanceVoxels = 2.0f;
+// How far a pose's change moves what the camera sees: a point this far in front of it.
+constexpr double kLeverArm = 2.0;  // m
 
-double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+double shift(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::Isometry3d moved = a.inverse() * b;
+  return moved.translation().norm() + kLeverArm * Eigen::AngleAxisd(moved.linear()).angle();
+}
 
 }  // namespace
 
 Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, const MapOptions& map,
-               const SubmapOptions& submaps, RunStats& stats, const PoseCorrections* corrections,
-               PoseSink* keyframe_trajectory)
+               const RefusionOptions& refusion, RunStats& stats,
+               const PoseCorrections* corrections, PoseSink* keyframe_trajectory)
     : integrator_(camera, filter, map, WorkerPool::resolve(map.fusion_threads)),
       voxel_size_(map.voxel_size),
       min_observations_(static_cast<std::uint32_t>(map.min_observations)),
-      submaps_(submaps),
+      refusion_(refusion),
       corrections_(corrections),
       map_(voxel_size_, min_observations_),
+      store_(refusion.keyframe_spacing, refusion.keyframe_turn,
+             static_cast<std::size_t>(refusion.keyframe_memory * 1024.0 * 1024.0)),
       keyframe_sink_(keyframe_trajectory ? keyframe_trajectory : &keyframes_),
       stats_(stats) {}
 
-bool Mapper::startsSubmap(const Frame& keyframe) const {
-  if (!corrections_ || keyframe.anchor < 0) return false;
-  if (active_anchor_ < 0) return true;  // the first anchored keyframe
-  // Still on the tracking keyframe the submap started on: every frame since is placed relative
-  // to it, and a loop closure moves them as one. Splitting here would only copy the same surface
-  // into submap after submap (a camera at rest kept 10 MB more a minute).
-  if (keyframe.anchor == active_anchor_) return false;
-  const Eigen::Isometry3d moved = active_start_.inverse() * keyframe.pose;
-  return active_keyframes_ >= submaps_.submap_keyframes ||
-         moved.translation().norm() > submaps_.submap_distance ||
-         angle(moved) > submaps_.submap_rotation;
+Eigen::Isometry3d Mapper::corrected(const PoseCorrections::Snapshot& correction,
+                                    std::int64_t anchor, const Eigen::Isometry3d& pose) const {
+  return anchor < 0 ? pose : correction.apply(anchor, pose);
 }
 
-void Mapper::closeSubmap() {
-  if (active_keyframes_ > 0) {
-    Submap submap;
-    submap.anchor = active_anchor_;
-    std::vector<VoxelMap::SurfacePoint> points;
-    map_.extract(points);
-    submap.points = SurfaceCloud(points);
-    closed_points_ += submap.points.size();
-    if (keep_meshes_) {
-      submap.mesh = extractMesh(map_);
-      // Kept for the whole run: without the slack push_back left.
-      submap.mesh.vertices.shrink_to_fit();
-      submap.mesh.colours.shrink_to_fit();
-      submap.mesh.triangles.shrink_to_fit();
-      closed_mesh_bytes_ += submap.mesh.memoryBytes();
-    }
-    closed_.push_back(std::move(submap));
-  }
-  map_ = VoxelMap(voxel_size_, min_observations_);  // lets the TSDF's memory go
-  active_keyframes_ = 0;
+void Mapper::integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map) {
+  integrator_.integrate(keyframe, pose, map, stats_);
+  const std::uint64_t integrations = map.integrations();
+  if (integrations % kPruneEvery == 0)
+    map.pruneFreeSpace(kPruneIdleKeyframes,
+                       kPruneClearanceVoxels * static_cast<float>(voxel_size_));
 }
 
 void Mapper::fuse(const Frame& keyframe) {
-  if (startsSubmap(keyframe)) {
-    closeSubmap();
-    active_anchor_ = keyframe.anchor;
-    active_start_ = keyframe.pose;
+  if (!corrections_) {
+    integrate(keyframe, keyframe.pose, map_);
+  } else {
+    const Eigen::Isometry3d pose =
+        corrected(corrections_->snapshot(), keyframe.anchor, keyframe.pose);
+    integrate(keyframe, pose, map_);
+    for (const std::size_t i : store_.add(keyframe, pose)) {
+      // Let go to stay within budget: a pass under way moves on without it.
+      if (refused_ && i < refused_count_) {
+        --refused_count_;
+        refused_at_.erase(refused_at_.begin() + static_cast<std::ptrdiff_t>(i));
+      }
+    }
+    refine(refusion_.refusion_pace);
   }
-  integrator_.integrate(keyframe, map_, stats_);
-  ++active_keyframes_;
   keyframe_sink_->record(keyframe.timestamp, keyframe.pose, keyframe.anchor);
-  const std::uint64_t fused = stats_.keyframes.fetch_add(1) + 1;
+  stats_.keyframes.fetch_add(1);
   const auto now = std::chrono::steady_clock::now();
   if (now >= next_count_) {
-    stats_.map_points.store(closed_points_ + map_.pointCount(&integrator_.pool()));
+    stats_.map_points.store(map_.pointCount(&integrator_.pool()));
     next_count_ = now + kCountPointsEvery;
   }
-  if (fused % kPruneEvery == 0)
-    map_.pruneFreeSpace(kPruneIdleKeyframes,
-                        kPruneClearanceVoxels * static_cast<float>(voxel_size_));
+}
+
+bool Mapper::lagsCorrections() {
+  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  if (correction.version == checked_version_) return false;
+  checked_version_ = correction.version;
+  for (std::size_t i = 0; i < store_.size(); ++i) {
+    const KeyframeStore::Entry& e = store_[i];
+    if (shift(e.fused_at, corrected(correction, e.anchor, e.pose)) > refusion_.refusion_shift)
+      return true;
+  }
+  return false;
+}
+
+bool Mapper::refine(int keyframes) {
+  if (!corrections_) return false;
+  if (!refused_) {
+    if (!lagsCorrections()) return false;
+    refused_ = std::make_unique<VoxelMap>(voxel_size_, min_observations_);
+    refused_count_ = 0;
+    refused_at_.clear();
+  }
+  const auto start = std::chrono::steady_clock::now();
+  // Each kept keyframe at the newest corrections: a loop closed meanwhile is taken in by the
+  // rest of this pass, and the next pass (lagsCorrections) catches what it moved before.
+  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  for (int k = 0; k < keyframes && refused_count_ < store_.size(); ++k, ++refused_count_) {
+    store_.decode(refused_count_, decoded_);
+    const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);
+    integrate(decoded_, pose, *refused_);
+    refused_at_.push_back(pose);
+    stats_.keyframes_refused.fetch_add(1);
+  }
+  if (refused_count_ == store_.size()) {
+    // Caught up: the re-fused map replaces the map (keyframes fused since it started are in it,
+    // as kept keyframes, or were not kept because a kept one sees the same).
+    map_ = std::move(*refused_);
+    refused_.reset();
+    for (std::size_t i = 0; i < refused_at_.size(); ++i) store_[i].fused_at = refused_at_[i];
+    stats_.map_refusions.fetch_add(1);
+    next_count_ = {};
+  }
+  stats_.refuse_latency.record(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return true;
+}
+
+void Mapper::settle() {
+  if (!corrections_) return;
+  const std::size_t pending = refused_ ? store_.size() - refused_count_ : store_.size();
+  bool logged = false;
+  while (refine(16)) {
+    if (!logged) {
+      spdlog::info("re-fusing up to {} kept keyframes at their final poses", pending);
+      logged = true;
+    }
+  }
 }
 
 std::size_t Mapper::memoryBytes() const {
-  std::size_t bytes = map_.memoryBytes();
-  for (const Submap& submap : closed_) bytes += submap.points.memoryBytes();
-  return bytes;
+  return map_.memoryBytes() + (refused_ ? refused_->memoryBytes() : 0) + store_.memoryBytes();
 }
 
 std::shared_ptr<MapCloud> Mapper::snapshot() const {
   auto cloud = std::make_shared<MapCloud>();
-  if (!corrections_ || (closed_.empty() && active_anchor_ < 0)) {
-    map_.extract(*cloud);
-  } else {
-    const PoseCorrections::Snapshot correction = corrections_->snapshot();
-    PointMerger merger(voxel_size_);
-    for (const Submap& submap : closed_) merger.add(submap.points, correction.of(submap.anchor));
-    std::vector<VoxelMap::SurfacePoint> active;
-    map_.extract(active);
-    merger.add(SurfaceCloud(active), correction.of(active_anchor_));
-    merger.extract(*cloud);
-  }
+  map_.extract(*cloud);
   stats_.map_points.store(cloud->size());  // what is written
   return cloud;
 }
 
 std::shared_ptr<TriangleMesh> Mapper::meshSnapshot() const {
-  if (!corrections_ || (closed_.empty() && active_anchor_ < 0))
-    return std::make_shared<TriangleMesh>(extractMesh(map_));
-  const PoseCorrections::Snapshot correction = corrections_->snapshot();
-  MeshMerger merger(voxel_size_);
-  // Newest first: the active submap, then back through the closed ones.
-  merger.add(extractMesh(map_), correction.of(active_anchor_));
-  for (auto submap = closed_.rbegin(); submap != closed_.rend(); ++submap)
-    merger.add(submap->mesh, correction.of(submap->anchor));
-  return std::make_shared<TriangleMesh>(merger.take());
+  return std::make_shared<TriangleMesh>(extractMesh(map_));
 }
 
 }  // namespace rgbdmap

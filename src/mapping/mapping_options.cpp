@@ -67,14 +67,22 @@ Keys mapKeys(MapOptions& o) {
   };
 }
 
-Keys submapKeys(SubmapOptions& o) {
+Keys refusionKeys(RefusionOptions& o) {
   return {
-      integer("loop.submap_keyframes", &o.submap_keyframes, 1, 1000000,
-              "with loop closure: fused keyframes per submap of the map"),
-      number("loop.submap_distance", &o.submap_distance, 0.01, 1000,
-             "with loop closure: a new submap after the camera moved this far from its start (m)"),
-      number("loop.submap_rotation", &o.submap_rotation, 0.01, 3.15,
-             "with loop closure: a new submap after the camera turned this far (rad)"),
+      number("loop.refusion_shift", &o.refusion_shift, 0.0001, 1,
+             "with loop closure: the map is fused again once a loop moves a kept keyframe this "
+             "far (m, a point 2 m in front of it)"),
+      integer("loop.refusion_pace", &o.refusion_pace, 1, 1000,
+              "with loop closure: keyframes fused again per new keyframe while the map follows a "
+              "loop"),
+      number("loop.keyframe_memory", &o.keyframe_memory, 1, 1000000,
+             "with loop closure: MB of kept keyframe images (for re-fusion); beyond it the "
+             "keyframe with the most kept neighbours is let go"),
+      number("loop.keyframe_spacing", &o.keyframe_spacing, 0, 100,
+             "with loop closure: kept keyframes this close (m) and within loop.keyframe_turn are "
+             "neighbours"),
+      number("loop.keyframe_turn", &o.keyframe_turn, 0, 3.15,
+             "with loop closure: see loop.keyframe_spacing (rad)"),
   };
 }
 

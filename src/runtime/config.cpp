@@ -9,7 +9,7 @@ Keys Config::keys() {
   append(keys, poseKeys(pose));
   append(keys, trackingKeys(tracking));
   append(keys, loopKeys(loop));
-  append(keys, submapKeys(submaps));
+  append(keys, refusionKeys(refusion));
   append(keys, keyframeKeys(keyframe));
   append(keys, filterKeys(filter));
   append(keys, mapKeys(map));

@@ -78,6 +78,14 @@ void FusionThread::run() {
         }
       }
       keyframes_.release(keyframe);
+    } else if (!finished && !failed) {
+      // Idle: the map follows the latest loop closure, a kept keyframe at a time.
+      try {
+        mapper_.refine(1);
+      } catch (const std::exception& e) {
+        failed = true;
+        if (on_error_) on_error_(std::string("re-fusing the map: ") + e.what());
+      }
     }
     if (!finished && requested_.exchange(false)) {
       try {

@@ -111,7 +111,7 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
   }
   stats.peak_rss_mb = peakRssMb();
-  stats.mesh_memory_mb = static_cast<double>(mapper.meshMemoryBytes()) / (1024.0 * 1024.0);
+  stats.kept_keyframes_mb = static_cast<double>(mapper.keptKeyframeBytes()) / (1024.0 * 1024.0);
   stats.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
   return exit_code;
 }
@@ -126,7 +126,7 @@ int Pipeline::run(RunControl& control) {
   const CameraIntrinsics camera = config.camera;
   const bool live = source_->isLive();
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
-  // move the trajectories and the map's submaps.
+  // move the trajectories, and the map follows them (Mapper).
   stats_.loop_closure = config.loop.enabled && tracksKeyframes(config.pose, config.tracking);
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
@@ -150,9 +150,8 @@ int Pipeline::run(RunControl& control) {
       makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
                        config.filter.max_depth, loop_closer.get()),
       stats_, frame_file.get());
-  Mapper mapper(config.camera, config.filter, config.map, config.submaps, stats_, corrections.get(),
+  Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_, corrections.get(),
                 keyframe_file.get());
-  if (!outputs_.mesh_path.empty()) mapper.keepMeshes();
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config.keyframe, config.pose),
@@ -202,7 +201,9 @@ int Pipeline::run(RunControl& control) {
   stats_.queue_depth.store(0);
   status.showFinal(stats_.wall_seconds);
 
-  // Finish: the final map, then the exit code.
+  // Finish: the final map (at the final corrections: re-fused if the last loops moved kept
+  // keyframes), then the exit code.
+  mapper.settle();
   int exit_code = saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, stats_);
   const std::string fatal = error.get();
   if (!fatal.empty()) {

@@ -57,6 +57,10 @@ struct RunStats {
   std::atomic<std::uint64_t> loops_accepted{0};
   std::atomic<std::uint64_t> loops_rejected{0};
   std::atomic<std::uint64_t> loop_keyframes_unsearched{0};
+  // With loop closure: times the map was fused again from the kept keyframes to follow a loop,
+  // and keyframes fused again in all.
+  std::atomic<std::uint64_t> map_refusions{0};
+  std::atomic<std::uint64_t> keyframes_refused{0};
   bool loop_closure = false;  // the run closes loops (set before the threads start)
 
   LatencyHistogram read_latency;       // capture: read + decode + convert
@@ -69,13 +73,14 @@ struct RunStats {
   LatencyHistogram queue_latency;      // capture-to-mapping: time a frame waited in the queue
   LatencyHistogram loop_latency;       // loop thread, per keyframe: graph, place recognition
   LatencyHistogram optimise_latency;   // pose graph optimisation, per accepted loop closure
+  LatencyHistogram refuse_latency;     // fusion thread, per step of re-fusion (a few keyframes)
   // --mesh only: marching cubes per map save (fusion thread, then the final save), and writing
   // the PLY (writer thread).
   LatencyHistogram mesh_extract_latency;
   LatencyHistogram mesh_write_latency;
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
-  double mesh_memory_mb = 0.0;  // the closed submaps' meshes kept at the end (loop closure)
-  double map_memory_mb = 0.0;   // the map at the end: TSDF blocks and index, closed submaps' points
+  double map_memory_mb = 0.0;   // the map at the end: TSDF blocks and index, kept keyframes
+  double kept_keyframes_mb = 0.0;  // of which the kept keyframes' images (loop closure)
 
   double wall_seconds = 0.0;
   double peak_rss_mb = 0.0;

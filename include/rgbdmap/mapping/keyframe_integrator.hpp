@@ -24,7 +24,12 @@ class KeyframeIntegrator {
   // `threads`: threads that fuse (the caller's included), from map.fusion_threads resolved.
   KeyframeIntegrator(const CameraIntrinsics& camera, const FilterOptions& filter,
                      const MapOptions& map, int threads = 1);
-  void integrate(const Frame& frame, VoxelMap& map, RunStats& stats);
+  void integrate(const Frame& frame, VoxelMap& map, RunStats& stats) {
+    integrate(frame, frame.pose, map, stats);
+  }
+  // At `pose` instead of the frame's own (loop closure's correction of it).
+  void integrate(const Frame& frame, const Eigen::Isometry3d& pose, VoxelMap& map,
+                 RunStats& stats);
   // The threads that fuse, for other work on the map between keyframes.
   WorkerPool& pool() { return pool_; }
 

@@ -15,16 +15,24 @@ struct MapOptions {
   int fusion_threads = 0;             // 0 = every core in a replay, 1 for a live camera
 };
 
-// With loop closure the map is fused into submaps anchored to tracking keyframes (Mapper); a new
-// one starts after this many fused keyframes or this far from where the submap started. Keys
-// loop.submap_*: they only matter with loop closure.
-struct SubmapOptions {
-  int submap_keyframes = 40;
-  double submap_distance = 1.0;  // m
-  double submap_rotation = 1.0;  // rad
+// With loop closure the map follows the pose graph (Mapper): fused keyframes are kept
+// (KeyframeStore) and, when a loop moves them, the map is fused again from them at their corrected
+// poses. Keys loop.*: they only matter with loop closure.
+struct RefusionOptions {
+  // A loop that moves a kept keyframe this far (a point 2 m in front of it) starts a re-fusion.
+  double refusion_shift = 0.003;  // m
+  // While the map is fused again: kept keyframes re-fused per new keyframe fused (and one each
+  // time the fusion thread is idle), so that a replay's fusion and a live camera's tracking keep
+  // their pace.
+  int refusion_pace = 2;
+  // Kept keyframes' images take at most this much memory; beyond it the keyframe with the most
+  // kept neighbours (within keyframe_spacing and keyframe_turn) is let go (KeyframeStore).
+  double keyframe_memory = 100.0;  // MB
+  double keyframe_spacing = 0.1;   // m
+  double keyframe_turn = 0.2;      // rad
 };
 
 Keys mapKeys(MapOptions& o);
-Keys submapKeys(SubmapOptions& o);
+Keys refusionKeys(RefusionOptions& o);
 
 }  // namespace rgbdmap

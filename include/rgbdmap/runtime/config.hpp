@@ -28,7 +28,7 @@ struct Config {
   PoseOptions pose;              // pose.*        (tracking)
   TrackingOptions tracking;      // tracking.*    (tracking): odometry without ground truth
   LoopOptions loop;              // loop.*        (slam): loop closure for the dense tracker
-  SubmapOptions submaps;         // loop.submap_* (mapping): the submaps loop closure moves
+  RefusionOptions refusion;      // loop.refusion_*, loop.keyframe_* (mapping): the map follows loops
   KeyframeOptions keyframe;      // keyframe.*    (mapping)
   FilterOptions filter;          // filter.*      (mapping)
   MapOptions map;                // map.*         (mapping)

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/base/png_decoder.hpp"
+#include "rgbdmap/base/png_encoder.hpp"
+
+namespace rgbdmap {
+
+// The keyframes the map is made of, their images kept compressed, so that the map can be fused
+// again when loop closure moves their poses (Mapper). Depth is kept as PNG in steps of 0.2 mm
+// (TUM's and the Kinect's own depth is no finer, so a TUM replay is kept exactly), colour as PNG
+// at half the resolution (a voxel at 1 m spans five pixels; colour does not move surfaces): about
+// 0.2 MB a keyframe at 640 x 480.
+//
+// Memory is bounded, and follows space rather than time: every keyframe is kept while the images
+// fit in `budget_bytes`; beyond it, the kept keyframe with the most kept neighbours (within
+// `spacing` and `turn`, poses as corrected when they were fused) is let go, one at a time. A
+// short run keeps every keyframe (its map re-fuses exactly); a camera at rest or walking laps
+// round a room thins the viewpoints it has seen most, not the places it saw once.
+class KeyframeStore {
+ public:
+  struct Entry {
+    double timestamp = 0.0;
+    std::uint64_t index = 0;
+    std::int64_t anchor = -1;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();       // as tracked (odometry)
+    Eigen::Isometry3d fused_at = Eigen::Isometry3d::Identity();   // in the map, corrected
+    std::vector<std::uint8_t> depth_png, colour_png;
+    int neighbours = 0;  // other kept keyframes within spacing and turn
+  };
+
+  KeyframeStore(double spacing, double turn, std::size_t budget_bytes)
+      : spacing_(spacing), turn_(turn), budget_bytes_(budget_bytes) {}
+
+  // Keeps the frame's images (`fused_at`: the corrected pose it was fused at), then lets kept
+  // keyframes go while over budget. Returns the indices let go, each as it was when let go.
+  std::vector<std::size_t> add(const Frame& frame, const Eigen::Isometry3d& fused_at);
+  std::size_t size() const { return entries_.size(); }
+  Entry& operator[](std::size_t i) { return entries_[i]; }
+  const Entry& operator[](std::size_t i) const { return entries_[i]; }
+  // The stored images back into `frame` (depth in metres, colour BGR), with the entry's
+  // timestamp, index, anchor and odometry pose.
+  void decode(std::size_t i, Frame& frame);
+  std::size_t memoryBytes() const { return bytes_ + entries_.capacity() * sizeof(Entry); }
+
+ private:
+  bool near(const Entry& a, const Entry& b) const;
+  void letGo(std::size_t i);
+
+  double spacing_, turn_;
+  std::size_t budget_bytes_;
+  std::vector<Entry> entries_;
+  std::size_t bytes_ = 0;
+  PngEncoder encoder_;
+  PngDecoder decoder_;
+  cv::Mat units_, half_;  // buffers
+};
+
+}  // namespace rgbdmap
