@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Memory per lap of a long walk (not CI): does memory follow space, not time? Maps SEQUENCE
+# (e.g. `rgbdmap synth -o walk --path walk --room 8x6x2.8 --frames 18000 --loop-seconds 20`:
+# 30 laps of 600 frames) and samples the process's RSS every second against the frames read
+# (from the status line, logged every 5 s); prints, per lap, the highest RSS seen in it and its
+# growth since the end of lap 2, then the run's stats (peak RSS, map and kept-keyframe memory,
+# re-fusions).
+#
+#   bash bench/laps.sh SEQUENCE FRAMES_PER_LAP [--build build] [-- extra rgbdmap args]
+# e.g. bash bench/laps.sh /tmp/walk 600 -- --rate 1     (or --rate max)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+[ $# -ge 2 ] || { echo "usage: bash bench/laps.sh SEQUENCE FRAMES_PER_LAP [--build DIR] [-- ARGS]" >&2; exit 2; }
+sequence=$1 lap=$2; shift 2
+build_dir=build
+extra=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --build) build_dir=$2; shift 2 ;;
+    --) shift; extra=("$@"); break ;;
+    *) echo "laps.sh: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+out=$(mktemp -d)
+"$build_dir/rgbdmap" --source "tum:$sequence" --out "$out/map.pcd" --no-render \
+  --viewer none --set pose.source=odometry --stats "$out/stats.json" "${extra[@]}" \
+  > "$out/log.txt" 2>&1 &
+pid=$!
+: > "$out/samples.txt"
+while kill -0 "$pid" 2>/dev/null; do
+  rss=$(awk '/^VmRSS/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
+  frames=$(grep -o 'frames [0-9]* read' "$out/log.txt" | tail -1 | awk '{print $2}')
+  [ -n "$rss" ] && echo "${frames:-0} $rss" >> "$out/samples.txt"
+  sleep 1
+done
+wait "$pid" || { echo "laps.sh: rgbdmap failed, see $out/log.txt" >&2; exit 1; }
+awk -v lap="$lap" '
+  { l = int($1 / lap) + 1; if ($2 > peak[l]) peak[l] = $2; if (l > laps) laps = l }
+  END {
+    print "| lap | highest RSS MB | growth since lap 2 MB |"
+    print "| --- | --- | --- |"
+    for (l = 1; l <= laps; ++l)
+      if (l in peak) printf "| %d | %.0f | %s |\n", l, peak[l] / 1024,
+        (l >= 2 && 2 in peak) ? sprintf("%+.0f", (peak[l] - peak[2]) / 1024) : ""
+  }' "$out/samples.txt"
+grep -o '"peak_rss_mb": [0-9.]*\|"map_memory_mb": [0-9.]*\|"kept_keyframes_mb": [0-9.]*\|"map_refusions": [0-9]*\|"keyframes": [0-9]*\|"loops_accepted": [0-9]*\|"frames_dropped": [0-9]*' "$out/stats.json" | tr '\n' ' '
+echo
+echo "outputs in $out"
