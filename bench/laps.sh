@@ -29,7 +29,7 @@ pid=$!
 : > "$out/samples.txt"
 while kill -0 "$pid" 2>/dev/null; do
   rss=$(awk '/^VmRSS/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
-  frames=$(grep -o 'frames [0-9]* read' "$out/log.txt" | tail -1 | awk '{print $2}')
+  frames=$( (grep -o 'frames [0-9]* read' "$out/log.txt" || true) | tail -1 | awk '{print $2}')
   [ -n "$rss" ] && echo "${frames:-0} $rss" >> "$out/samples.txt"
   sleep 1
 done

@@ -80,8 +80,8 @@ TEST(MeshCheckpoint, LoopClosureMeshesTheMapThatFollowsTheGraph) {
   std::string output;
   ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --out " + dir +
                           "/map.pcd --mesh " + dir + "/mesh.ply --rate max -q --no-render " +
-                          "--set pose.source=odometry " +
-                          "--set keyframe.every_n=2 --stats " + dir + "/stats.json",
+                          "--set pose.source=odometry " + "--set keyframe.every_n=2 --stats " +
+                          dir + "/stats.json",
                       &output),
             0)
       << output;

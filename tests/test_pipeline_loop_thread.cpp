@@ -1,7 +1,7 @@
 // The loop thread inside the running pipeline, short enough for ThreadSanitizer: tracking hands
-// keyframes over, the graph publishes corrections while fusion re-fuses the map and snapshots it for checkpoints,
-// and the final map and trajectories take the last corrections. (Accuracy on longer sequences:
-// test_loop_mapping.cpp.)
+// keyframes over, the graph publishes corrections while fusion re-fuses the map and snapshots it
+// for checkpoints, and the final map and trajectories take the last corrections. (Accuracy on
+// longer sequences: test_loop_mapping.cpp.)
 #include <gtest/gtest.h>
 
 #include <filesystem>

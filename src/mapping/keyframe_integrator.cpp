@@ -43,8 +43,8 @@ KeyframeIntegrator::KeyframeIntegrator(const CameraIntrinsics& camera, const Fil
   if (filter.undistort && camera.hasDistortion()) lens_.emplace(camera);
 }
 
-void KeyframeIntegrator::integrate(const Frame& frame, const Eigen::Isometry3d& pose,
-                                   VoxelMap& map, RunStats& stats) {
+void KeyframeIntegrator::integrate(const Frame& frame, const Eigen::Isometry3d& pose, VoxelMap& map,
+                                   RunStats& stats) {
   const auto start = std::chrono::steady_clock::now();
   filter_.apply(frame.depth, depth_, scratch_);  // the frame stays untouched
   smoother_.apply(depth_, smoothing_);

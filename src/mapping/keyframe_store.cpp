@@ -1,5 +1,7 @@
 #include "rgbdmap/mapping/keyframe_store.hpp"
 
+#include <algorithm>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -7,20 +9,32 @@ namespace rgbdmap {
 namespace {
 
 constexpr double kDepthUnitsPerMetre = 5000.0;  // TUM's scale: 0.2 mm, up to 13.1 m
+constexpr double kLeverArm = 2.0;               // m: a turn moves what is seen 2 m away this much
+
+double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::Isometry3d moved = a.inverse() * b;
+  return moved.translation().norm() + kLeverArm * Eigen::AngleAxisd(moved.linear()).angle();
+}
 
 }  // namespace
 
-bool KeyframeStore::near(const Entry& a, const Entry& b) const {
-  const Eigen::Isometry3d moved = a.fused_at.inverse() * b.fused_at;
-  return moved.translation().norm() <= spacing_ &&
-         Eigen::AngleAxisd(moved.linear()).angle() <= turn_;
+void KeyframeStore::findNearest(std::size_t i) {
+  entries_[i].nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t j = 0; j < entries_.size(); ++j)
+    if (j != i)
+      entries_[i].nearest = std::min(entries_[i].nearest,
+                                     viewpointDistance(entries_[i].fused_at, entries_[j].fused_at));
 }
 
 void KeyframeStore::letGo(std::size_t i) {
-  for (std::size_t j = 0; j < entries_.size(); ++j)
-    if (j != i && near(entries_[i], entries_[j])) --entries_[j].neighbours;
+  const Eigen::Isometry3d gone = entries_[i].fused_at;
   bytes_ -= entries_[i].depth_png.size() + entries_[i].colour_png.size();
   entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(i));
+  // Those whose nearest it may have been look again (the distance is not symmetric to the last
+  // bit: a margin).
+  for (std::size_t j = 0; j < entries_.size(); ++j)
+    if (viewpointDistance(entries_[j].fused_at, gone) <= entries_[j].nearest * (1 + 1e-9) + 1e-12)
+      findNearest(j);
 }
 
 std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Isometry3d& fused_at) {
@@ -41,21 +55,21 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
   e.depth_png.shrink_to_fit();
   e.colour_png.shrink_to_fit();
   bytes_ += e.depth_png.size() + e.colour_png.size();
+  e.nearest = std::numeric_limits<double>::infinity();
   for (Entry& other : entries_) {
-    if (near(other, e)) {
-      ++other.neighbours;
-      ++e.neighbours;
-    }
+    const double d = viewpointDistance(other.fused_at, e.fused_at);
+    other.nearest = std::min(other.nearest, d);
+    e.nearest = std::min(e.nearest, d);
   }
   entries_.push_back(std::move(e));
-  // The most crowded viewpoint first; among equals the oldest, whose view later ones repeat.
+  // The older of the nearest pair: its nearest neighbour is the smallest (ties: the older).
   std::vector<std::size_t> let_go;
   while (bytes_ > budget_bytes_ && entries_.size() > 1) {
-    std::size_t crowded = 0;
+    std::size_t redundant = 0;
     for (std::size_t i = 1; i < entries_.size(); ++i)
-      if (entries_[i].neighbours > entries_[crowded].neighbours) crowded = i;
-    letGo(crowded);
-    let_go.push_back(crowded);
+      if (entries_[i].nearest < entries_[redundant].nearest) redundant = i;
+    letGo(redundant);
+    let_go.push_back(redundant);
   }
   return let_go;
 }

@@ -30,16 +30,15 @@ double shift(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 }  // namespace
 
 Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, const MapOptions& map,
-               const RefusionOptions& refusion, RunStats& stats,
-               const PoseCorrections* corrections, PoseSink* keyframe_trajectory)
+               const RefusionOptions& refusion, RunStats& stats, const PoseCorrections* corrections,
+               PoseSink* keyframe_trajectory)
     : integrator_(camera, filter, map, WorkerPool::resolve(map.fusion_threads)),
       voxel_size_(map.voxel_size),
       min_observations_(static_cast<std::uint32_t>(map.min_observations)),
       refusion_(refusion),
       corrections_(corrections),
       map_(voxel_size_, min_observations_),
-      store_(refusion.keyframe_spacing, refusion.keyframe_turn,
-             static_cast<std::size_t>(refusion.keyframe_memory * 1024.0 * 1024.0)),
+      store_(static_cast<std::size_t>(refusion.keyframe_memory * 1024.0 * 1024.0)),
       keyframe_sink_(keyframe_trajectory ? keyframe_trajectory : &keyframes_),
       stats_(stats) {}
 

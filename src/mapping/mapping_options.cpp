@@ -77,12 +77,7 @@ Keys refusionKeys(RefusionOptions& o) {
               "loop"),
       number("loop.keyframe_memory", &o.keyframe_memory, 1, 1000000,
              "with loop closure: MB of kept keyframe images (for re-fusion); beyond it the "
-             "keyframe with the most kept neighbours is let go"),
-      number("loop.keyframe_spacing", &o.keyframe_spacing, 0, 100,
-             "with loop closure: kept keyframes this close (m) and within loop.keyframe_turn are "
-             "neighbours"),
-      number("loop.keyframe_turn", &o.keyframe_turn, 0, 3.15,
-             "with loop closure: see loop.keyframe_spacing (rad)"),
+             "keyframe nearest another kept one is let go"),
   };
 }
 

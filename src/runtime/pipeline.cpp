@@ -150,8 +150,8 @@ int Pipeline::run(RunControl& control) {
       makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
                        config.filter.max_depth, loop_closer.get()),
       stats_, frame_file.get());
-  Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_, corrections.get(),
-                keyframe_file.get());
+  Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_,
+                corrections.get(), keyframe_file.get());
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config.keyframe, config.pose),

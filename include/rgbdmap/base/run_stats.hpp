@@ -79,7 +79,7 @@ struct RunStats {
   LatencyHistogram mesh_extract_latency;
   LatencyHistogram mesh_write_latency;
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
-  double map_memory_mb = 0.0;   // the map at the end: TSDF blocks and index, kept keyframes
+  double map_memory_mb = 0.0;      // the map at the end: TSDF blocks and index, kept keyframes
   double kept_keyframes_mb = 0.0;  // of which the kept keyframes' images (loop closure)
 
   double wall_seconds = 0.0;

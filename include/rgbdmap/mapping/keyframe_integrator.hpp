@@ -28,8 +28,7 @@ class KeyframeIntegrator {
     integrate(frame, frame.pose, map, stats);
   }
   // At `pose` instead of the frame's own (loop closure's correction of it).
-  void integrate(const Frame& frame, const Eigen::Isometry3d& pose, VoxelMap& map,
-                 RunStats& stats);
+  void integrate(const Frame& frame, const Eigen::Isometry3d& pose, VoxelMap& map, RunStats& stats);
   // The threads that fuse, for other work on the map between keyframes.
   WorkerPool& pool() { return pool_; }
 

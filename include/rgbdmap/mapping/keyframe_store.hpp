@@ -18,24 +18,25 @@ namespace rgbdmap {
 // 0.2 MB a keyframe at 640 x 480.
 //
 // Memory is bounded, and follows space rather than time: every keyframe is kept while the images
-// fit in `budget_bytes`; beyond it, the kept keyframe with the most kept neighbours (within
-// `spacing` and `turn`, poses as corrected when they were fused) is let go, one at a time. A
-// short run keeps every keyframe (its map re-fuses exactly); a camera at rest or walking laps
-// round a room thins the viewpoints it has seen most, not the places it saw once.
+// fit in `budget_bytes`; beyond it, the most redundant one is let go, one at a time: of the two
+// kept keyframes whose viewpoints are nearest each other (poses as corrected when they were
+// fused; distance: the translation plus the turn times a 2 m lever arm), the older. A short run
+// keeps every keyframe (its map re-fuses exactly); a long one keeps viewpoints spread evenly over
+// where the camera went, so a camera at rest or walking laps round a room thins the places it
+// has seen most, not the places it saw once.
 class KeyframeStore {
  public:
   struct Entry {
     double timestamp = 0.0;
     std::uint64_t index = 0;
     std::int64_t anchor = -1;
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();       // as tracked (odometry)
-    Eigen::Isometry3d fused_at = Eigen::Isometry3d::Identity();   // in the map, corrected
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();      // as tracked (odometry)
+    Eigen::Isometry3d fused_at = Eigen::Isometry3d::Identity();  // in the map, corrected
     std::vector<std::uint8_t> depth_png, colour_png;
-    int neighbours = 0;  // other kept keyframes within spacing and turn
+    double nearest = 0.0;  // viewpoint distance to the nearest other kept keyframe
   };
 
-  KeyframeStore(double spacing, double turn, std::size_t budget_bytes)
-      : spacing_(spacing), turn_(turn), budget_bytes_(budget_bytes) {}
+  explicit KeyframeStore(std::size_t budget_bytes) : budget_bytes_(budget_bytes) {}
 
   // Keeps the frame's images (`fused_at`: the corrected pose it was fused at), then lets kept
   // keyframes go while over budget. Returns the indices let go, each as it was when let go.
@@ -49,10 +50,9 @@ class KeyframeStore {
   std::size_t memoryBytes() const { return bytes_ + entries_.capacity() * sizeof(Entry); }
 
  private:
-  bool near(const Entry& a, const Entry& b) const;
+  void findNearest(std::size_t i);
   void letGo(std::size_t i);
 
-  double spacing_, turn_;
   std::size_t budget_bytes_;
   std::vector<Entry> entries_;
   std::size_t bytes_ = 0;

@@ -25,11 +25,9 @@ struct RefusionOptions {
   // time the fusion thread is idle), so that a replay's fusion and a live camera's tracking keep
   // their pace.
   int refusion_pace = 2;
-  // Kept keyframes' images take at most this much memory; beyond it the keyframe with the most
-  // kept neighbours (within keyframe_spacing and keyframe_turn) is let go (KeyframeStore).
-  double keyframe_memory = 100.0;  // MB
-  double keyframe_spacing = 0.1;   // m
-  double keyframe_turn = 0.2;      // rad
+  // Kept keyframes' images take at most this much memory; beyond it the most redundant viewpoint
+  // is let go (KeyframeStore).
+  double keyframe_memory = 256.0;  // MB
 };
 
 Keys mapKeys(MapOptions& o);

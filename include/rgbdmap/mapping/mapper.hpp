@@ -58,8 +58,8 @@ class Mapper {
   std::size_t keptKeyframeBytes() const { return store_.memoryBytes(); }
 
  private:
-  Eigen::Isometry3d corrected(const PoseCorrections::Snapshot& correction,
-                              std::int64_t anchor, const Eigen::Isometry3d& pose) const;
+  Eigen::Isometry3d corrected(const PoseCorrections::Snapshot& correction, std::int64_t anchor,
+                              const Eigen::Isometry3d& pose) const;
   // Whether a kept keyframe's corrected pose has moved by refusion_shift from where it was fused.
   bool lagsCorrections();
   void integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map);

@@ -22,16 +22,16 @@ namespace rgbdmap {
 struct Config {
   std::string preset;  // name of the preset the camera section came from, for the log
 
-  CameraOptions camera;          // camera.*      (capture)
-  ReplayOptions replay;          // replay.*      (runtime)
-  QueueOptions queue;            // queue.*       (runtime)
-  PoseOptions pose;              // pose.*        (tracking)
-  TrackingOptions tracking;      // tracking.*    (tracking): odometry without ground truth
-  LoopOptions loop;              // loop.*        (slam): loop closure for the dense tracker
-  RefusionOptions refusion;      // loop.refusion_*, loop.keyframe_* (mapping): the map follows loops
-  KeyframeOptions keyframe;      // keyframe.*    (mapping)
-  FilterOptions filter;          // filter.*      (mapping)
-  MapOptions map;                // map.*         (mapping)
+  CameraOptions camera;      // camera.*      (capture)
+  ReplayOptions replay;      // replay.*      (runtime)
+  QueueOptions queue;        // queue.*       (runtime)
+  PoseOptions pose;          // pose.*        (tracking)
+  TrackingOptions tracking;  // tracking.*    (tracking): odometry without ground truth
+  LoopOptions loop;          // loop.*        (slam): loop closure for the dense tracker
+  RefusionOptions refusion;  // loop.refusion_*, loop.keyframe_* (mapping): the map follows loops
+  KeyframeOptions keyframe;  // keyframe.*    (mapping)
+  FilterOptions filter;      // filter.*      (mapping)
+  MapOptions map;            // map.*         (mapping)
   CheckpointOptions checkpoint;  // checkpoint.*  (runtime)
   OptionSections sections;       // e.g. ros.*    (registered by adapters)
 

@@ -6,8 +6,8 @@ namespace rgbdmap {
 
 // The tunables of loop closure (config section "loop"): place recognition among earlier
 // keyframes, its geometric checks and the pose graph. How the map follows the graph is the
-// mapping layer's (RefusionOptions, keys loop.refusion_*, loop.keyframe_*). Defaults are the measured ones
-// (docs/loop-closure.md).
+// mapping layer's (RefusionOptions, keys loop.refusion_*, loop.keyframe_*). Defaults are the
+// measured ones (docs/loop-closure.md).
 struct LoopOptions {
   bool enabled = true;  // off: odometry only, one map in the odometry frame (as before loops)
 
