@@ -265,15 +265,4 @@ void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   cloud.is_dense = true;
 }
 
-void VoxelMap::extract(std::vector<SurfacePoint>& points) const {
-  points.clear();
-  points.reserve(points_);
-  for (const Block& b : blocks_) {
-    if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
-    forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
-      points.push_back({p, v.weight(), v.r, v.g, v.b});
-    });
-  }
-}
-
 }  // namespace rgbdmap

@@ -102,13 +102,6 @@ class VoxelMap {
   // One coloured point per surface voxel, in a deterministic order (blocks in the order they
   // were created).
   void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const;
-  // The same points with the weight of their voxel (how much was fused there), for merging maps.
-  struct SurfacePoint {
-    Eigen::Vector3f position;
-    float weight = 0.0f;
-    std::uint8_t r = 0, g = 0, b = 0;
-  };
-  void extract(std::vector<SurfacePoint>& points) const;
 
   // --- for the integrator ---
   // Starts an integration: blocks allocated or fetched with touchBlock() until
