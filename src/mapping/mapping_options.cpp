@@ -76,8 +76,8 @@ Keys refusionKeys(RefusionOptions& o) {
               "with loop closure: keyframes fused again per new keyframe while the map follows a "
               "loop"),
       number("loop.keyframe_memory", &o.keyframe_memory, 1, 1000000,
-             "with loop closure: MB of kept keyframe images (for re-fusion); beyond it the "
-             "keyframe nearest another kept one is let go"),
+             "with loop closure: MB of kept keyframe images (for re-fusion); beyond it keyframes "
+             "are let go evenly over time, a viewpoint seen once last"),
   };
 }
 

@@ -17,13 +17,12 @@ namespace rgbdmap {
 // at half the resolution (a voxel at 1 m spans five pixels; colour does not move surfaces): about
 // 0.2 MB a keyframe at 640 x 480.
 //
-// Memory is bounded, and follows space rather than time: every keyframe is kept while the images
-// fit in `budget_bytes`; beyond it, the most redundant one is let go, one at a time: of the two
-// kept keyframes whose viewpoints are nearest each other (poses as corrected when they were
-// fused; distance: the translation plus the turn times a 2 m lever arm), the older. A short run
-// keeps every keyframe (its map re-fuses exactly); a long one keeps viewpoints spread evenly over
-// where the camera went, so a camera at rest or walking laps round a room thins the places it
-// has seen most, not the places it saw once.
+// Memory is bounded: every keyframe is kept while the images fit in `budget_bytes`; beyond it one
+// is let go at a time: the one whose neighbours in time are nearest each other, among those whose
+// viewpoint another kept keyframe shares (within 0.3 m, a turn counting 2 m per radian; poses as
+// corrected when they were fused). A short run keeps every keyframe (its map re-fuses exactly); a
+// long one keeps keyframes spread evenly over the time spent, and every viewpoint seen only once,
+// so a camera at rest or walking laps round a room thins what it has seen again and again.
 class KeyframeStore {
  public:
   struct Entry {
@@ -51,6 +50,7 @@ class KeyframeStore {
 
  private:
   void findNearest(std::size_t i);
+  std::size_t mostRedundant() const;
   void letGo(std::size_t i);
 
   std::size_t budget_bytes_;

@@ -25,9 +25,9 @@ struct RefusionOptions {
   // time the fusion thread is idle), so that a replay's fusion and a live camera's tracking keep
   // their pace.
   int refusion_pace = 2;
-  // Kept keyframes' images take at most this much memory; beyond it the most redundant viewpoint
-  // is let go (KeyframeStore).
-  double keyframe_memory = 256.0;  // MB
+  // Kept keyframes' images take at most this much memory; beyond it keyframes are let go evenly
+  // over time, a viewpoint seen once last (KeyframeStore).
+  double keyframe_memory = 128.0;  // MB
 };
 
 Keys mapKeys(MapOptions& o);
