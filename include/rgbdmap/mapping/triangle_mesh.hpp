@@ -9,8 +9,7 @@ namespace rgbdmap {
 
 // A coloured, indexed triangle mesh (what `--mesh` writes as PLY): one colour per vertex,
 // triangles as three vertex indices, counter-clockwise seen from the observed (free) side.
-// Kept as plain arrays (27 bytes a vertex, 12 a triangle) because closed submaps hold theirs
-// for the whole run.
+// Plain arrays (27 bytes a vertex, 12 a triangle): a room's mesh has millions of triangles.
 struct TriangleMesh {
   using Colour = std::array<std::uint8_t, 3>;  // r, g, b
   using Triangle = std::array<std::uint32_t, 3>;
