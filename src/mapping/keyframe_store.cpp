@@ -9,15 +9,15 @@ namespace rgbdmap {
 namespace {
 
 constexpr double kDepthUnitsPerMetre = 5000.0;  // TUM's scale: 0.2 mm, up to 13.1 m
-constexpr double kLeverArm = 2.0;               // m: a turn moves what is seen 2 m away this much
+constexpr double kLeverArm = 2.0;               // m
 constexpr double kUniqueViewpoint = 0.3;  // viewpoint distance (m) with no kept keyframe within
+
+}  // namespace
 
 double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   const Eigen::Isometry3d moved = a.inverse() * b;
   return moved.translation().norm() + kLeverArm * Eigen::AngleAxisd(moved.linear()).angle();
 }
-
-}  // namespace
 
 void KeyframeStore::findNearest(std::size_t i) {
   entries_[i].nearest = std::numeric_limits<double>::infinity();

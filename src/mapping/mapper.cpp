@@ -19,13 +19,6 @@ constexpr std::chrono::milliseconds kCountPointsEvery{1000};
 constexpr std::uint64_t kPruneEvery = 10;
 constexpr std::uint64_t kPruneIdleKeyframes = 30;
 constexpr float kPruneClearanceVoxels = 2.0f;
-// How far a pose's change moves what the camera sees: a point this far in front of it.
-constexpr double kLeverArm = 2.0;  // m
-
-double shift(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  const Eigen::Isometry3d moved = a.inverse() * b;
-  return moved.translation().norm() + kLeverArm * Eigen::AngleAxisd(moved.linear()).angle();
-}
 
 }  // namespace
 
@@ -86,7 +79,8 @@ bool Mapper::lagsCorrections() {
   checked_version_ = correction.version;
   for (std::size_t i = 0; i < store_.size(); ++i) {
     const KeyframeStore::Entry& e = store_[i];
-    if (shift(e.fused_at, corrected(correction, e.anchor, e.pose)) > refusion_.refusion_shift)
+    if (viewpointDistance(e.fused_at, corrected(correction, e.anchor, e.pose)) >
+        refusion_.refusion_shift)
       return true;
   }
   return false;

@@ -11,6 +11,10 @@
 
 namespace rgbdmap {
 
+// How far apart two camera poses see things: the translation plus the turn times a 2 m lever arm
+// (how far a point 2 m in front of the camera moves).
+double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b);
+
 // The keyframes the map is made of, their images kept compressed, so that the map can be fused
 // again when loop closure moves their poses (Mapper). Depth is kept as PNG in steps of 0.2 mm
 // (TUM's and the Kinect's own depth is no finer, so a TUM replay is kept exactly), colour as PNG
