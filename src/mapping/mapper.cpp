@@ -57,10 +57,8 @@ void Mapper::fuse(const Frame& keyframe) {
     integrate(keyframe, pose, map_);
     for (const std::size_t i : store_.add(keyframe, pose)) {
       // Let go to stay within budget: a pass under way moves on without it.
-      if (refused_ && i < refused_count_) {
-        --refused_count_;
+      if (refused_ && i < refused_at_.size())
         refused_at_.erase(refused_at_.begin() + static_cast<std::ptrdiff_t>(i));
-      }
     }
     refine(refusion_.refusion_pace);
   }
@@ -91,23 +89,22 @@ bool Mapper::refine(int keyframes) {
   if (!refused_) {
     if (!lagsCorrections()) return false;
     refused_ = std::make_unique<VoxelMap>(voxel_size_, min_observations_);
-    refused_count_ = 0;
     refused_at_.clear();
   }
   const auto start = std::chrono::steady_clock::now();
   // Each kept keyframe at the newest corrections: a loop closed meanwhile is taken in by the
   // rest of this pass, and the next pass (lagsCorrections) catches what it moved before.
   const PoseCorrections::Snapshot correction = corrections_->snapshot();
-  for (int k = 0; k < keyframes && refused_count_ < store_.size(); ++k, ++refused_count_) {
-    store_.decode(refused_count_, decoded_);
+  for (int k = 0; k < keyframes && refused_at_.size() < store_.size(); ++k) {
+    store_.decode(refused_at_.size(), decoded_);
     const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);
     integrate(decoded_, pose, *refused_);
     refused_at_.push_back(pose);
     stats_.keyframes_refused.fetch_add(1);
   }
-  if (refused_count_ == store_.size()) {
-    // Caught up: the re-fused map replaces the map (keyframes fused since it started are in it,
-    // as kept keyframes, or were not kept because a kept one sees the same).
+  if (refused_at_.size() == store_.size()) {
+    // Caught up: the re-fused map replaces the map (keyframes fused since it started are in it
+    // as kept keyframes, or were let go to stay within the budget).
     map_ = std::move(*refused_);
     refused_.reset();
     for (std::size_t i = 0; i < refused_at_.size(); ++i) store_[i].fused_at = refused_at_[i];
@@ -121,7 +118,7 @@ bool Mapper::refine(int keyframes) {
 
 void Mapper::settle() {
   if (!corrections_) return;
-  const std::size_t pending = refused_ ? store_.size() - refused_count_ : store_.size();
+  const std::size_t pending = store_.size() - (refused_ ? refused_at_.size() : 0);
   bool logged = false;
   while (refine(16)) {
     if (!logged) {

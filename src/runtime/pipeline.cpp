@@ -111,7 +111,8 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
   }
   stats.peak_rss_mb = peakRssMb();
-  stats.kept_keyframes_mb = static_cast<double>(mapper.keptKeyframeBytes()) / (1024.0 * 1024.0);
+  stats.kept_keyframes_mb =
+      static_cast<double>(mapper.keptKeyframes().memoryBytes()) / (1024.0 * 1024.0);
   stats.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
   return exit_code;
 }

@@ -55,7 +55,6 @@ class Mapper {
   const KeyframeStore& keptKeyframes() const { return store_; }
   // The TSDFs' blocks and index (two while re-fusing), and the kept keyframes' images.
   std::size_t memoryBytes() const;
-  std::size_t keptKeyframeBytes() const { return store_.memoryBytes(); }
 
  private:
   Eigen::Isometry3d corrected(const PoseCorrections::Snapshot& correction, std::int64_t anchor,
@@ -71,10 +70,9 @@ class Mapper {
   const PoseCorrections* corrections_;
   VoxelMap map_;
   KeyframeStore store_;
-  // The map being fused again (null when the map follows the corrections), the kept keyframes
-  // re-fused into it so far, and the poses they were re-fused at.
+  // The map being fused again (null when the map follows the corrections), and the poses the
+  // first refused_at_.size() kept keyframes were re-fused at.
   std::unique_ptr<VoxelMap> refused_;
-  std::size_t refused_count_ = 0;
   std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> refused_at_;
   std::uint64_t checked_version_ = 0;  // corrections compared with the kept keyframes
   Frame decoded_;                      // a kept keyframe, decoded for re-fusion
