@@ -6,7 +6,7 @@
 # and a thicker surface than the re-fused one. Not part of CI.
 #
 #   bash bench/map_follows_poses.sh SEQUENCE [--build build] [--out DIR] [-- extra rgbdmap args]
-# Needs python3-open3d and python3-scipy (Debian) for the thickness tool.
+# Needs python3-open3d and python3-scipy for the thickness tool: bash scripts/setup.sh --bench.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ $# -ge 1 ] || { echo "usage: bash bench/map_follows_poses.sh SEQUENCE [--build DIR] [--out DIR] [-- ARGS]" >&2; exit 2; }
@@ -25,7 +25,7 @@ done
 [ -d "$sequence" ] || { echo "map_follows_poses.sh: $sequence: no such folder" >&2; exit 2; }
 thickness=../shared/tools/map_thickness.py
 /usr/bin/python3 -c 'import open3d, scipy' 2>/dev/null ||
-  { echo "map_follows_poses.sh: $thickness needs python3-open3d and python3-scipy" >&2; exit 2; }
+  { echo "map_follows_poses.sh: $thickness needs python3-open3d and python3-scipy (bash scripts/setup.sh --bench)" >&2; exit 2; }
 mkdir -p "$out"
 bin=$build_dir/rgbdmap
 "$bin" --source "tum:$sequence" --out "$out/live.pcd" --rate max -q --no-render \

@@ -260,7 +260,7 @@ python=/usr/bin/python3
 [ -x "$python" ] || python=python3
 have_open3d=0
 "$python" -c 'import open3d' >/dev/null 2>&1 && have_open3d=1
-[ "$have_open3d" = 1 ] || note "Open3D: skipped (no python3-open3d; apt-get install python3-open3d)"
+[ "$have_open3d" = 1 ] || note "Open3D: skipped (no python3-open3d; bash scripts/setup.sh --bench)"
 run_open3d() {  # SCENARIO SEQUENCE EVERY_N EXACT_SCENE(or empty) THREADS(empty: its default)
   [ "$have_open3d" = 1 ] || return 0
   local scenario="$1" seq="$2" n="$3" scene="$4" threads="$5"

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package rgbdmap needs to build, test and render maps.
 # Run as root (CI does); uses sudo when it is available and we are not root.
+#   bash scripts/setup.sh [--bench]   (--bench: also what bench/ scripts compare with: Open3D as
+#                                      a peer, and ../shared/tools/map_thickness.py's needs)
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
@@ -15,6 +17,7 @@ packages=(
   libstd-srvs-dev libtf2-ros-dev ros-core python3-rosbag python3-rostopic
   python3-sensor-msgs python3-geometry-msgs python3-std-srvs
 )
+if [ "${1:-}" = "--bench" ]; then packages+=(python3-open3d python3-scipy); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
