@@ -54,10 +54,11 @@ void Mapper::fuse(const Frame& keyframe) {
   } else {
     const Eigen::Isometry3d pose =
         corrected(corrections_->snapshot(), keyframe.anchor, keyframe.pose);
-    integrate(keyframe, pose, map_);
+    // While a pass runs the keyframe waits for it in the store (fused once, at the pass's poses).
+    if (!refusing()) integrate(keyframe, pose, map_);
     for (const std::size_t i : store_.add(keyframe, pose)) {
       // Let go to stay within budget: a pass under way moves on without it.
-      if (refused_ && i < refused_at_.size())
+      if (refusing() && i < refused_at_.size())
         refused_at_.erase(refused_at_.begin() + static_cast<std::ptrdiff_t>(i));
     }
     refine(refusion_.refusion_pace);
@@ -65,7 +66,7 @@ void Mapper::fuse(const Frame& keyframe) {
   keyframe_sink_->record(keyframe.timestamp, keyframe.pose, keyframe.anchor);
   stats_.keyframes.fetch_add(1);
   const auto now = std::chrono::steady_clock::now();
-  if (now >= next_count_) {
+  if (!refusing() && now >= next_count_) {
     stats_.map_points.store(map_.pointCount(&integrator_.pool()));
     next_count_ = now + kCountPointsEvery;
   }
@@ -86,9 +87,16 @@ bool Mapper::lagsCorrections() {
 
 bool Mapper::refine(int keyframes) {
   if (!corrections_) return false;
-  if (!refused_) {
+  if (!refusing()) {
     if (!lagsCorrections()) return false;
-    refused_ = std::make_unique<VoxelMap>(voxel_size_, min_observations_);
+    // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
+    // while the pass fuses a new one in its place.
+    auto cloud = std::make_shared<MapCloud>();
+    map_.extract(*cloud);
+    stats_.map_points.store(cloud->size());
+    if (keep_meshes_) shown_mesh_ = std::make_shared<const TriangleMesh>(extractMesh(map_));
+    shown_ = std::move(cloud);
+    map_ = VoxelMap(voxel_size_, min_observations_);
     refused_at_.clear();
   }
   const auto start = std::chrono::steady_clock::now();
@@ -98,15 +106,15 @@ bool Mapper::refine(int keyframes) {
   for (int k = 0; k < keyframes && refused_at_.size() < store_.size(); ++k) {
     store_.decode(refused_at_.size(), decoded_);
     const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);
-    integrate(decoded_, pose, *refused_);
+    integrate(decoded_, pose, map_);
     refused_at_.push_back(pose);
     stats_.keyframes_refused.fetch_add(1);
   }
   if (refused_at_.size() == store_.size()) {
-    // Caught up: the re-fused map replaces the map (keyframes fused since it started are in it
-    // as kept keyframes, or were let go to stay within the budget).
-    map_ = std::move(*refused_);
-    refused_.reset();
+    // Caught up: the map is every kept keyframe at its corrected pose (keyframes let go to stay
+    // within the budget are not in it), and is shown again.
+    shown_.reset();
+    shown_mesh_.reset();
     for (std::size_t i = 0; i < refused_at_.size(); ++i) store_[i].fused_at = refused_at_[i];
     stats_.map_refusions.fetch_add(1);
     next_count_ = {};
@@ -118,7 +126,7 @@ bool Mapper::refine(int keyframes) {
 
 void Mapper::settle() {
   if (!corrections_) return;
-  const std::size_t pending = store_.size() - (refused_ ? refused_at_.size() : 0);
+  const std::size_t pending = store_.size() - (refusing() ? refused_at_.size() : 0);
   bool logged = false;
   while (refine(16)) {
     if (!logged) {
@@ -129,18 +137,22 @@ void Mapper::settle() {
 }
 
 std::size_t Mapper::memoryBytes() const {
-  return map_.memoryBytes() + (refused_ ? refused_->memoryBytes() : 0) + store_.memoryBytes();
+  return map_.memoryBytes() + store_.memoryBytes() +
+         (shown_ ? shown_->size() * sizeof(MapCloud::PointType) : 0) +
+         (shown_mesh_ ? shown_mesh_->memoryBytes() : 0);
 }
 
-std::shared_ptr<MapCloud> Mapper::snapshot() const {
+std::shared_ptr<const MapCloud> Mapper::snapshot() const {
+  if (refusing()) return shown_;
   auto cloud = std::make_shared<MapCloud>();
   map_.extract(*cloud);
   stats_.map_points.store(cloud->size());  // what is written
   return cloud;
 }
 
-std::shared_ptr<TriangleMesh> Mapper::meshSnapshot() const {
-  return std::make_shared<TriangleMesh>(extractMesh(map_));
+std::shared_ptr<const TriangleMesh> Mapper::meshSnapshot() const {
+  if (shown_mesh_) return shown_mesh_;
+  return std::make_shared<const TriangleMesh>(extractMesh(map_));
 }
 
 }  // namespace rgbdmap

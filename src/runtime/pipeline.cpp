@@ -153,6 +153,7 @@ int Pipeline::run(RunControl& control) {
       stats_, frame_file.get());
   Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_,
                 corrections.get(), keyframe_file.get());
+  mapper.keepMeshes(!outputs_.mesh_path.empty());
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config.keyframe, config.pose),

@@ -16,10 +16,10 @@ namespace rgbdmap {
 double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b);
 
 // The keyframes the map is made of, their images kept compressed, so that the map can be fused
-// again when loop closure moves their poses (Mapper). Depth is kept as PNG in steps of 0.2 mm
-// (TUM's and the Kinect's own depth is no finer, so a TUM replay is kept exactly), colour as PNG
-// at half the resolution (a voxel at 1 m spans five pixels; colour does not move surfaces): about
-// 0.2 MB a keyframe at 640 x 480.
+// again when loop closure moves their poses (Mapper). Depth is kept as PNG in steps of inverse
+// depth half the sensor's noise, colour as PNG at half the resolution and 6 bits a channel (a
+// voxel at 1 m spans five pixels; colour does not move surfaces): about 0.16 MB a keyframe of
+// TUM's at 640 x 480, 0.3 MB a synthetic one (its noise is not quantised as a Kinect's is).
 //
 // Memory is bounded: every keyframe is kept while the images fit in `budget_bytes`; beyond it one
 // is let go at a time: the one whose neighbours in time are nearest each other, among those whose
@@ -62,7 +62,7 @@ class KeyframeStore {
   std::size_t bytes_ = 0;
   PngEncoder encoder_;
   PngDecoder decoder_;
-  cv::Mat units_, half_;  // buffers
+  cv::Mat units_, inverse_, half_;  // buffers
 };
 
 }  // namespace rgbdmap

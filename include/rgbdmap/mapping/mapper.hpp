@@ -24,9 +24,11 @@ namespace rgbdmap {
 // The map is one TSDF in the world frame. With loop closure (`corrections` given) each keyframe
 // is fused at its pose as corrected at that moment, and its images are kept (KeyframeStore).
 // When a loop moves kept keyframes by more than refusion_shift, the map is fused again from the
-// kept keyframes at their corrected poses into a second TSDF, a few keyframes at a time between
-// new ones (refine()), which replaces the map once it has caught up. So the map written is what
-// fusing the keyframes at the poses known then gives: one surface per wall, not one per visit.
+// kept keyframes at their corrected poses, a few keyframes at a time between new ones (refine()).
+// So the map written is what fusing the keyframes at the poses known then gives: one surface per
+// wall, not one per visit. While a pass runs, what is shown and written is the map as it was when
+// the pass began, kept as its point cloud (and mesh): the TSDF it came from is freed, so a pass
+// never holds two TSDFs, and keyframes that arrive meanwhile are fused once, by the pass.
 class Mapper {
  public:
   // `keyframe_trajectory` (may be null: then the Mapper keeps it, see keyframeTrajectory()) is
@@ -44,16 +46,22 @@ class Mapper {
   // Until the map is fused at the latest corrections (before the final save).
   void settle();
 
-  // A copy of the map as a point cloud (what a checkpoint writes).
-  std::shared_ptr<MapCloud> snapshot() const;
-  // The map as a triangle mesh (marching cubes on the TSDF, see extractMesh()).
-  std::shared_ptr<TriangleMesh> meshSnapshot() const;
+  // Whether meshes are asked for (meshSnapshot()): a pass then keeps the mesh it began from too.
+  void keepMeshes(bool keep) { keep_meshes_ = keep; }
+
+  // The map as a point cloud (what a checkpoint writes): one extracted now, or while a pass runs
+  // the one it began from.
+  std::shared_ptr<const MapCloud> snapshot() const;
+  // The map as a triangle mesh (marching cubes on the TSDF, see extractMesh()); while a pass runs,
+  // the one it began from (when keepMeshes(), else the pass's own so far).
+  std::shared_ptr<const TriangleMesh> meshSnapshot() const;
   // The fused keyframes' poses, corrected by the latest loop closures (empty when they went to a
   // sink of the caller's).
   Trajectory keyframeTrajectory() const { return keyframes_.resolve(corrections_); }
   // The kept keyframes (loop closure only).
   const KeyframeStore& keptKeyframes() const { return store_; }
-  // The TSDFs' blocks and index (two while re-fusing), and the kept keyframes' images.
+  // The TSDF's blocks and index, the kept keyframes' images, and while a pass runs the map it
+  // began from.
   std::size_t memoryBytes() const;
 
  private:
@@ -61,6 +69,7 @@ class Mapper {
                               const Eigen::Isometry3d& pose) const;
   // Whether a kept keyframe's corrected pose has moved by refusion_shift from where it was fused.
   bool lagsCorrections();
+  bool refusing() const { return shown_ != nullptr; }
   void integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map);
 
   KeyframeIntegrator integrator_;
@@ -70,9 +79,11 @@ class Mapper {
   const PoseCorrections* corrections_;
   VoxelMap map_;
   KeyframeStore store_;
-  // The map being fused again (null when the map follows the corrections), and the poses the
-  // first refused_at_.size() kept keyframes were re-fused at.
-  std::unique_ptr<VoxelMap> refused_;
+  // While a pass runs: the map it began from (what is shown), and the poses the first
+  // refused_at_.size() kept keyframes were re-fused at (into map_).
+  std::shared_ptr<const MapCloud> shown_;
+  std::shared_ptr<const TriangleMesh> shown_mesh_;
+  bool keep_meshes_ = false;
   std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> refused_at_;
   std::uint64_t checked_version_ = 0;  // corrections compared with the kept keyframes
   Frame decoded_;                      // a kept keyframe, decoded for re-fusion
