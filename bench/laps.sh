@@ -3,8 +3,8 @@
 # (e.g. `rgbdmap synth -o walk --path walk --room 8x6x2.8 --frames 18000 --loop-seconds 20`:
 # 30 laps of 600 frames) and samples the process's RSS every second against the frames read
 # (from the status line, logged every 5 s); prints, per lap, the highest RSS seen in it and its
-# growth since the end of lap 2, then the run's stats (peak RSS, map and kept-keyframe memory,
-# re-fusions).
+# growth since lap 2, and the map's and the place database's memory at the lap's last status
+# line, then the run's stats (peak RSS, map and kept-keyframe memory, re-fusions).
 #
 #   bash bench/laps.sh SEQUENCE FRAMES_PER_LAP [--build build] [-- extra rgbdmap args]
 # e.g. bash bench/laps.sh /tmp/walk 600 -- --rate 1     (or --rate max)
@@ -29,20 +29,26 @@ pid=$!
 : > "$out/samples.txt"
 while kill -0 "$pid" 2>/dev/null; do
   rss=$(awk '/^VmRSS/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
-  frames=$( (grep -o 'frames [0-9]* read' "$out/log.txt" || true) | tail -1 | awk '{print $2}')
-  [ -n "$rss" ] && echo "${frames:-0} $rss" >> "$out/samples.txt"
+  status=$( (grep 'frames [0-9]* read' "$out/log.txt" || true) | tail -1)
+  frames=$(echo "$status" | sed -n 's/.*frames \([0-9]*\) read.*/\1/p')
+  map_mb=$(echo "$status" | sed -n 's/.* points, \([0-9.]*\) MB.*/\1/p')
+  places_mb=$(echo "$status" | sed -n 's/.*places \([0-9.]*\) MB.*/\1/p')
+  [ -n "$rss" ] && echo "${frames:-0} $rss ${map_mb:--} ${places_mb:--}" >> "$out/samples.txt"
   sleep 1
 done
 wait "$pid" || { echo "laps.sh: rgbdmap failed, see $out/log.txt" >&2; exit 1; }
 awk -v lap="$lap" '
-  { l = int($1 / lap) + 1; if ($2 > peak[l]) peak[l] = $2; if (l > laps) laps = l }
+  {
+    l = int($1 / lap) + 1; if ($2 > peak[l]) peak[l] = $2; if (l > laps) laps = l
+    map[l] = $3; places[l] = $4
+  }
   END {
-    print "| lap | highest RSS MB | growth since lap 2 MB |"
-    print "| --- | --- | --- |"
+    print "| lap | highest RSS MB | growth since lap 2 MB | map MB | places MB |"
+    print "| --- | --- | --- | --- | --- |"
     for (l = 1; l <= laps; ++l)
-      if (l in peak) printf "| %d | %.0f | %s |\n", l, peak[l] / 1024,
-        (l >= 2 && 2 in peak) ? sprintf("%+.0f", (peak[l] - peak[2]) / 1024) : ""
+      if (l in peak) printf "| %d | %.0f | %s | %s | %s |\n", l, peak[l] / 1024,
+        (l >= 2 && 2 in peak) ? sprintf("%+.0f", (peak[l] - peak[2]) / 1024) : "", map[l], places[l]
   }' "$out/samples.txt"
-grep -o '"peak_rss_mb": [0-9.]*\|"map_memory_mb": [0-9.]*\|"kept_keyframes_mb": [0-9.]*\|"map_refusions": [0-9]*\|"keyframes": [0-9]*\|"loops_accepted": [0-9]*\|"frames_dropped": [0-9]*' "$out/stats.json" | tr '\n' ' '
+grep -o '"peak_rss_mb": [0-9.]*\|"map_memory_mb": [0-9.]*\|"kept_keyframes_mb": [0-9.]*\|"place_database_mb": [0-9.]*\|"map_refusions": [0-9]*\|"keyframes": [0-9]*\|"loops_accepted": [0-9]*\|"frames_dropped": [0-9]*' "$out/stats.json" | tr '\n' ' '
 echo
 echo "outputs in $out"

@@ -65,6 +65,7 @@ void Mapper::fuse(const Frame& keyframe) {
   }
   keyframe_sink_->record(keyframe.timestamp, keyframe.pose, keyframe.anchor);
   stats_.keyframes.fetch_add(1);
+  stats_.map_bytes.store(memoryBytes());
   const auto now = std::chrono::steady_clock::now();
   if (!refusing() && now >= next_count_) {
     stats_.map_points.store(map_.pointCount(&integrator_.pool()));

@@ -10,23 +10,31 @@
 namespace rgbdmap {
 namespace {
 
-// " | loops N" while loop closure runs (the status line says when a loop closed).
+double megabytes(const std::atomic<std::uint64_t>& bytes) {
+  return static_cast<double>(bytes.load()) / (1024.0 * 1024.0);
+}
+
+// " | loops N, places X MB" while loop closure runs (the status line says when a loop closed).
 std::string loops(const RunStats& s) {
   if (!s.loop_closure) return "";
-  return " | loops " + std::to_string(s.loops_accepted.load());
+  char text[64];
+  std::snprintf(text, sizeof text, " | loops %llu, places %.1f MB",
+                static_cast<unsigned long long>(s.loops_accepted.load()),
+                megabytes(s.place_bytes));
+  return text;
 }
 
 std::string statusLine(const RunStats& s, double elapsed) {
   char line[256];
   std::snprintf(line, sizeof line,
                 "frames %llu read, %llu dropped, %llu skipped | %.1f fps | keyframes %llu | map "
-                "%llu points | queue %llu%s%s",
+                "%llu points, %.0f MB | queue %llu%s%s",
                 static_cast<unsigned long long>(s.frames_captured.load()),
                 static_cast<unsigned long long>(s.frames_dropped.load()),
                 static_cast<unsigned long long>(s.frames_skipped.load()),
                 elapsed > 0 ? static_cast<double>(s.frames_processed.load()) / elapsed : 0.0,
                 static_cast<unsigned long long>(s.keyframes.load()),
-                static_cast<unsigned long long>(s.map_points.load()),
+                static_cast<unsigned long long>(s.map_points.load()), megabytes(s.map_bytes),
                 static_cast<unsigned long long>(s.queue_depth.load()), loops(s).c_str(),
                 s.tracking_lost.load() ? " | tracking lost" : "");
   return line;

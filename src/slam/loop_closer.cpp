@@ -180,6 +180,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   }
   if (!accepted.empty()) close(accepted);
   if (nearRememberedPlace(id)) places_.forget(id);
+  stats_.place_bytes.store(places_.memoryBytes(), std::memory_order_relaxed);
   publish();
 }
 

@@ -35,6 +35,8 @@ struct RunStats {
   std::atomic<std::uint64_t> frames_without_pose{0};
   std::atomic<std::uint64_t> keyframes{0};
   std::atomic<std::uint64_t> map_points{0};
+  std::atomic<std::uint64_t> map_bytes{0};    // Mapper::memoryBytes(), after each keyframe
+  std::atomic<std::uint64_t> place_bytes{0};  // loop closure's place database
   std::atomic<std::uint64_t> checkpoints_written{0};
   std::atomic<std::uint64_t> checkpoints_failed{0};
   std::atomic<std::uint64_t> queue_depth{0};
@@ -81,6 +83,7 @@ struct RunStats {
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
   double map_memory_mb = 0.0;      // the map at the end: TSDF blocks and index, kept keyframes
   double kept_keyframes_mb = 0.0;  // of which the kept keyframes' images (loop closure)
+  double place_database_mb = 0.0;  // loop closure's places (ORB features, dense references)
 
   double wall_seconds = 0.0;
   double peak_rss_mb = 0.0;
