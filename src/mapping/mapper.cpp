@@ -93,6 +93,7 @@ bool Mapper::refine(int keyframes) {
     // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
     // while the pass fuses a new one in its place.
     auto cloud = std::make_shared<MapCloud>();
+    map_.pointCount(&integrator_.pool());  // an exact count: the cloud is reserved to fit
     map_.extract(*cloud);
     stats_.map_points.store(cloud->size());
     if (keep_meshes_) shown_mesh_ = std::make_shared<const TriangleMesh>(extractMesh(map_));

@@ -246,7 +246,9 @@ std::size_t VoxelMap::pointCount(WorkerPool* pool) {
 
 void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   cloud.clear();
-  cloud.reserve(points_);
+  // The last count and some room: the map may have grown since, and a vector that outgrows its
+  // reserve holds old and new arrays at once (a map's worth of points 1.5 times over).
+  cloud.reserve(points_ + points_ / 16 + kBlockVoxels);
   for (const Block& b : blocks_) {
     if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {

@@ -27,7 +27,7 @@ struct RefusionOptions {
   int refusion_pace = 2;
   // Kept keyframes' images take at most this much memory; beyond it keyframes are let go evenly
   // over time, a viewpoint seen once last (KeyframeStore).
-  double keyframe_memory = 128.0;  // MB
+  double keyframe_memory = 64.0;  // MB
 };
 
 Keys mapKeys(MapOptions& o);
