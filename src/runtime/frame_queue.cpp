@@ -94,4 +94,11 @@ Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
 
 void FrameQueue::release(Frame* frame) { free_.push(frame); }
 
+void FrameQueue::freeImages() {
+  for (const std::unique_ptr<Frame>& frame : storage_) {
+    frame->depth.release();
+    frame->color.release();
+  }
+}
+
 }  // namespace rgbdmap

@@ -196,6 +196,7 @@ int Pipeline::run(RunControl& control) {
   status.showUntil([&tracking] { return tracking.done(); }, control.stop);
   capture.join();
   tracking.join();
+  queue.freeImages();
   if (loop_closer) loop_closer->finish();  // every keyframe searched: final corrections
   if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());
   fusion.finish();

@@ -72,6 +72,8 @@ void LoopCloser::finish() {
   spdlog::info("loop closure: {} keyframes, {} loops closed, {} rejected; place database {:.1f} MB",
                nodes_.size(), stats_.loops_accepted.load(), stats_.loops_rejected.load(),
                static_cast<double>(places_.memoryBytes()) / (1024.0 * 1024.0));
+  // No keyframe comes any more: the places are freed for the final save.
+  for (std::size_t id = 0; id < nodes_.size(); ++id) places_.forget(static_cast<int>(id));
 }
 
 void LoopCloser::run() {

@@ -48,6 +48,10 @@ class FrameQueue {
   // Returns a frame taken with pop() to the pool.
   void release(Frame* frame);
 
+  // Frees the pool's images, once neither side uses the queue any more (both threads joined): the
+  // final save needs the memory more.
+  void freeImages();
+
   std::size_t capacity() const { return capacity_; }
   std::size_t depth() const {
     const std::int64_t n = queued_.load(std::memory_order_relaxed);
