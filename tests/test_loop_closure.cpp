@@ -111,6 +111,54 @@ TEST(PoseGraph, LoopEdgePullsTheDriftedLapShut) {
   EXPECT_LT(rotationAngle(graph.pose(0).inverse() * loop.truth[0]), 1e-9);
 }
 
+// A second lap, closed at every keyframe against the first (already closed), optimised in a
+// window of the newest keyframes: the first lap stays put, the second is pulled onto it as well
+// as optimising everything would, and the problem solved stays the window's size (a patrol's
+// graph grows with every keyframe; each loop must not cost more with it).
+TEST(PoseGraph, AWindowOfTheNewestKeyframesIsPulledOntoTheOldLap) {
+  const DriftedLoop loop = driftedLoop(40);
+  auto twoLaps = [&](int first_free) {
+    PoseGraph graph;
+    // Lap 1: closed already (its edges as measured after correction: exact).
+    for (const auto& p : loop.truth) graph.addNode(p);
+    for (PoseGraph::Edge e : loop.steps) {
+      e.measurement = loop.truth[e.from].inverse() * loop.truth[e.to];
+      graph.addEdge(e);
+    }
+    // Lap 2 starts where lap 1 did and drifts like it.
+    for (int i = 0; i < 40; ++i) {
+      graph.addNode(i == 0 ? loop.truth[0] : graph.pose(39 + i) * loop.steps[i - 1].measurement);
+      PoseGraph::Edge step;
+      step.from = 39 + i;
+      step.to = 40 + i;
+      step.measurement = i == 0 ? loop.truth[39].inverse() * loop.truth[0]
+                                : loop.steps[static_cast<std::size_t>(i - 1)].measurement;
+      graph.addEdge(step);
+      PoseGraph::Edge closure;  // lap 2's keyframe i is lap 1's keyframe i
+      closure.from = i;
+      closure.to = 40 + i;
+      closure.sqrt_information = 10.0 * PoseGraph::Matrix6d::Identity();
+      closure.loop = true;
+      graph.addEdge(closure);
+    }
+    std::vector<Eigen::Isometry3d> before;
+    for (int i = 0; i < 40; ++i) before.push_back(graph.pose(i));
+    EXPECT_TRUE(graph.optimise(100, first_free).usable);
+    double lap1_moved = 0, lap2_error = 0;
+    for (int i = 0; i < 40; ++i) {
+      lap1_moved = std::max(lap1_moved, (graph.pose(i).translation() - before[i].translation()).norm());
+      lap2_error = std::max(lap2_error,
+                            (graph.pose(40 + i).translation() - loop.truth[i].translation()).norm());
+    }
+    return std::make_pair(lap1_moved, lap2_error);
+  };
+  const double all_error = twoLaps(0).second;
+  const auto [window_moved, window_error] = twoLaps(40);
+  EXPECT_EQ(window_moved, 0.0);  // held
+  EXPECT_LT(window_error, 0.01);
+  EXPECT_LT(window_error, all_error + 0.002) << "optimising everything: " << all_error;
+}
+
 TEST(PoseGraph, RemovingTheLoopEdgeRestoresOdometry) {
   const DriftedLoop loop = driftedLoop(20);
   PoseGraph graph;

@@ -1,5 +1,7 @@
 #include "rgbdmap/base/run_stats.hpp"
 
+#include <malloc.h>
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -100,6 +102,12 @@ double peakRssMb() {
   while (std::getline(status, line))
     if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
   return 0.0;
+}
+
+void releaseFreedMemory() {
+#if defined(__GLIBC__)
+  ::malloc_trim(0);
+#endif
 }
 
 }  // namespace rgbdmap

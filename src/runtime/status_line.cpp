@@ -10,6 +10,10 @@
 namespace rgbdmap {
 namespace {
 
+// Memory the threads freed is handed back to the system this often (s): it costs a walk over the
+// heap, and a long run would otherwise keep what it freed (releaseFreedMemory()).
+constexpr double kReleaseEvery = 5.0;
+
 double megabytes(const std::atomic<std::uint64_t>& bytes) {
   return static_cast<double>(bytes.load()) / (1024.0 * 1024.0);
 }
@@ -51,7 +55,7 @@ StatusLine::StatusLine(RunStats& stats, const FrameQueue& queue, bool enabled,
       start_(start) {}
 
 void StatusLine::showUntil(const std::function<bool()>& done, const std::atomic<bool>& stop) {
-  double last_print = 0;
+  double last_print = 0, last_release = 0;
   bool stop_announced = false;
   while (!done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -62,6 +66,10 @@ void StatusLine::showUntil(const std::function<bool()>& done, const std::atomic<
       spdlog::info("stopping: draining {} queued frames, then saving", queue_.depth());
     }
     const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
+    if (elapsed - last_release >= kReleaseEvery) {
+      last_release = elapsed;
+      releaseFreedMemory();
+    }
     if (enabled_ && elapsed - last_print >= (tty_ ? 0.25 : 5.0)) {
       last_print = elapsed;
       if (tty_)

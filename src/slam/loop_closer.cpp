@@ -249,7 +249,12 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   const Eigen::Isometry3d newest_before = graph_.pose(graph_.size() - 1);
   for (const LoopMeasurement& loop : loops)
     graph_.addEdge(edgeOf(loop.earlier, loop.later, loop.later_in_earlier, loop.information, true));
-  const PoseGraph::Summary summary = graph_.optimise();
+  // Since the last loop closed, with a margin: what odometry alone has carried since (the whole
+  // graph until the first loop).
+  const int window = options_.optimise_window;
+  const int first_free =
+      last_closed_ < 0 ? 0 : std::max(0, std::min(graph_.size() - window, last_closed_ - window));
+  const PoseGraph::Summary summary = graph_.optimise(100, first_free);
   stats_.optimise_latency.record(summary.seconds);
   bool consistent = summary.usable;
   double worst = 0.0;
@@ -281,7 +286,7 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
       "the camera's pose moved {:.1f} cm, {:.1f} deg ({} keyframes optimised in {:.0f} ms)",
       last.later, later.timestamp, last.earlier, earlier.timestamp,
       later.timestamp - earlier.timestamp, 100.0 * moved.translation().norm(),
-      angle(moved) * kDegreesPerRadian, graph_.size(), summary.seconds * 1e3);
+      angle(moved) * kDegreesPerRadian, graph_.size() - first_free, summary.seconds * 1e3);
 }
 
 void LoopCloser::publish() {

@@ -45,6 +45,9 @@ Keys loopKeys(LoopOptions& o) {
              "two loops are consistent when they correct a keyframe to within this (rad)"),
       number("loop.max_loop_residual", &o.max_loop_residual, 0, 1e6,
              "a loop whose whitened residual stays above this after optimising is removed"),
+      integer("loop.optimise_window", &o.optimise_window, 1, 100000000,
+              "a loop optimises the keyframes since the last loop and this many more (and at "
+              "least this many newest); older ones stay put"),
       number("loop.edge_pixels", &o.edge_pixels, 0.001, 1e9,
              "independent pixels an alignment is worth (scales every edge's information)"),
   };

@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -83,9 +84,9 @@ PoseGraph::Matrix6d PoseGraph::sqrtInformation(const Matrix6d& information) {
   return values.asDiagonal() * eig.eigenvectors().transpose();
 }
 
-PoseGraph::Summary PoseGraph::optimise(int max_iterations) {
+PoseGraph::Summary PoseGraph::optimise(int max_iterations, int first_free) {
   Summary out;
-  if (nodes_.size() < 2 || edges_.empty()) {
+  if (nodes_.size() < 2 || edges_.empty() || first_free >= static_cast<int>(nodes_.size())) {
     out.usable = true;
     return out;
   }
@@ -95,19 +96,23 @@ PoseGraph::Summary PoseGraph::optimise(int max_iterations) {
   ceres::Problem problem(problem_options);
   ceres::EigenQuaternionManifold quaternion;
   const std::vector<Node> before = nodes_;
+  first_free = std::max(first_free, 1);
   for (const Edge& e : edges_) {
+    if (e.from < first_free && e.to < first_free) continue;
     Node& a = nodes_[static_cast<std::size_t>(e.from)];
     Node& b = nodes_[static_cast<std::size_t>(e.to)];
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
         new RelativePoseCost{e.measurement, e.sqrt_information});
     problem.AddResidualBlock(cost, nullptr, a.t, a.q, b.t, b.q);
   }
-  for (Node& n : nodes_) {
-    if (problem.HasParameterBlock(n.q)) problem.SetManifold(n.q, &quaternion);
-  }
-  if (problem.HasParameterBlock(nodes_[0].t)) {
-    problem.SetParameterBlockConstant(nodes_[0].t);
-    problem.SetParameterBlockConstant(nodes_[0].q);
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    Node& n = nodes_[i];
+    if (!problem.HasParameterBlock(n.q)) continue;
+    problem.SetManifold(n.q, &quaternion);
+    if (static_cast<int>(i) < first_free) {
+      problem.SetParameterBlockConstant(n.t);
+      problem.SetParameterBlockConstant(n.q);
+    }
   }
 
   ceres::Solver::Options options;

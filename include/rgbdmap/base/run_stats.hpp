@@ -93,5 +93,10 @@ struct RunStats {
 
 // Peak resident set size of this process in MB (VmHWM), 0 if unknown.
 double peakRssMb();
+// Hands memory the process has freed back to the system. The C library keeps freed memory for
+// reuse, scattered over its per-thread arenas; a long run that frees and allocates as it goes
+// (loop closure's optimisations, re-fusion) otherwise creeps up in resident memory it is not
+// using.
+void releaseFreedMemory();
 
 }  // namespace rgbdmap

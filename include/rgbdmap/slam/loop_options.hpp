@@ -44,6 +44,11 @@ struct LoopOptions {
   double consistent_rotation = 0.035;    // rad
   // After optimising, a loop whose whitened residual stays above this is taken out again.
   double max_loop_residual = 5.0;
+  // A loop optimises the keyframes since the last loop closed before it, and at least this many
+  // of the newest, with this many more before them as a margin; older ones stay where earlier
+  // loops put them. A camera going over old ground closes a loop every few keyframes, and
+  // optimising every keyframe of an hour's patrol each time would grow without bound.
+  int optimise_window = 300;
 
   // Each edge's information is the aligner's per-pixel information times this many pixels: the
   // number of independent measurements an alignment is worth (neighbouring pixels are not

@@ -30,7 +30,9 @@ class PoseGraph {
   void addEdge(const Edge& edge);
   void removeLastEdges(std::size_t count);  // undoes the last `count` addEdge calls
 
-  Summary optimise(int max_iterations = 100);
+  // Optimises the nodes from `first_free` on; the older ones (and node 0 always) are held where
+  // they are, and edges between two of them are left out (they cannot change anything).
+  Summary optimise(int max_iterations = 100, int first_free = 0);
 
   int size() const { return static_cast<int>(nodes_.size()); }
   Eigen::Isometry3d pose(int node) const;
