@@ -33,7 +33,7 @@ FrameQueue::FrameQueue(std::size_t capacity, QueuePolicy policy, int width, int 
     storage_.push_back(std::move(frame));
   }
   const std::size_t shared = storage_.size() - (policy == QueuePolicy::kDropOldest ? 1 : 0);
-  for (std::size_t i = 0; i < shared; ++i) free_.push(storage_[i].get());
+  for (std::size_t i = shared; i-- > 0;) free_.bounded_push(storage_[i].get());
   if (policy == QueuePolicy::kDropOldest) overflow_ = storage_.back().get();
 }
 
@@ -75,7 +75,7 @@ Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
       while (filled_.read_available() > capacity_ && filled_.pop(frame)) {
         queued_.fetch_sub(1);
         dropped_.fetch_add(1);
-        free_.push(frame);
+        free_.bounded_push(frame);
       }
     }
     // Read `closed_` before popping: a frame pushed before close() is then always seen.
@@ -92,7 +92,7 @@ Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
   return frame;
 }
 
-void FrameQueue::release(Frame* frame) { free_.push(frame); }
+void FrameQueue::release(Frame* frame) { free_.bounded_push(frame); }
 
 void FrameQueue::freeImages() {
   for (const std::unique_ptr<Frame>& frame : storage_) {
