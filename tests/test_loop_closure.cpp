@@ -146,9 +146,10 @@ TEST(PoseGraph, AWindowOfTheNewestKeyframesIsPulledOntoTheOldLap) {
     EXPECT_TRUE(graph.optimise(100, first_free).usable);
     double lap1_moved = 0, lap2_error = 0;
     for (int i = 0; i < 40; ++i) {
-      lap1_moved = std::max(lap1_moved, (graph.pose(i).translation() - before[i].translation()).norm());
-      lap2_error = std::max(lap2_error,
-                            (graph.pose(40 + i).translation() - loop.truth[i].translation()).norm());
+      lap1_moved =
+          std::max(lap1_moved, (graph.pose(i).translation() - before[i].translation()).norm());
+      lap2_error = std::max(
+          lap2_error, (graph.pose(40 + i).translation() - loop.truth[i].translation()).norm());
     }
     return std::make_pair(lap1_moved, lap2_error);
   };

@@ -15,7 +15,7 @@ namespace {
 constexpr double kInverseDepthUnits = 1300.0;
 // Colour keeps 6 bits of 8 (an error of 2 levels in 255, not to be seen) and compresses 40% better.
 constexpr int kColourBitsDropped = 2;
-constexpr double kLeverArm = 2.0;               // m
+constexpr double kLeverArm = 2.0;         // m
 constexpr double kUniqueViewpoint = 0.3;  // viewpoint distance (m) with no kept keyframe within
 
 }  // namespace

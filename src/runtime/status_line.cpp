@@ -23,8 +23,7 @@ std::string loops(const RunStats& s) {
   if (!s.loop_closure) return "";
   char text[64];
   std::snprintf(text, sizeof text, " | loops %llu, places %.1f MB",
-                static_cast<unsigned long long>(s.loops_accepted.load()),
-                megabytes(s.place_bytes));
+                static_cast<unsigned long long>(s.loops_accepted.load()), megabytes(s.place_bytes));
   return text;
 }
 

@@ -132,8 +132,7 @@ PoseGraph::Summary PoseGraph::optimise(int max_iterations, int first_free) {
       finite = finite && std::isfinite(v);
   out.usable = finite && summary.termination_type != ceres::FAILURE;
   if (!out.usable) nodes_ = before;  // keep the last good estimates
-  out.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }
 

@@ -69,7 +69,7 @@ class FrameQueue {
   std::vector<std::unique_ptr<Frame>> storage_;
   boost::lockfree::spsc_queue<Frame*> filled_;
   boost::lockfree::stack<Frame*> free_;  // bounded_push only: never allocates
-  Frame* overflow_ = nullptr;  // kDropOldest: captured into when the pool is exhausted
+  Frame* overflow_ = nullptr;            // kDropOldest: captured into when the pool is exhausted
   std::atomic<std::int64_t> queued_{0};
   std::atomic<std::uint64_t> dropped_{0};
   std::atomic<bool> closed_{false};
