@@ -220,6 +220,7 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
     return ReadStatus::kSkipped;
   }
   frame.has_pose = false;
+  frame.has_up = false;
   frame.origin = label();
   backoff_.reset();  // frames flow: the next outage starts backing off afresh
   if (is_file_ && rate_ > 0) pace(frame.timestamp);

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
@@ -29,6 +30,7 @@ struct CommandLine {
   std::vector<std::string> sets;
   std::string stats_file;
   std::string mesh;
+  std::string grid;
   std::string viewer = "auto";
   bool no_render = false;
   bool quiet = false;
@@ -58,6 +60,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   }
   checkOutputFolder(o.out, "--out");
   if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
+  if (!o.grid.empty()) checkOutputFolder(o.grid, "--grid");
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string& s : o.sets) {
@@ -74,6 +77,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
           ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
 
   PipelineOutputs outputs = outputsBeside(o.out, o.mesh);
+  outputs.grid_path = o.grid;
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
@@ -109,6 +113,7 @@ int main(int argc, char** argv) {
   // Before any thread exists, so all inherit the mask (the `rgbdmap` launcher blocked the signals
   // before this program was even loaded: none can kill it during start-up).
   rgbdmap::RunSignals::block();
+  rgbdmap::tuneAllocator();
   // spdlog creates its registry on first use: do it here, before any thread can log.
   spdlog::default_logger_raw();
   rgbdmap::RunControl control;
@@ -126,6 +131,9 @@ int main(int argc, char** argv) {
   app.add_option("--set", o.sets, "override a config key: --set map.voxel_size=0.005 (repeatable)");
   app.add_option("--mesh", o.mesh,
                  "also write the map as a coloured triangle mesh (binary PLY), with every save");
+  app.add_option("--grid", o.grid,
+                 "also write a 2-D occupancy grid for ROS navigation (G.pgm and G.yaml, "
+                 "map_server's format), with every save");
   app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
   app.add_option("--viewer", o.viewer, "live window: auto (when a display is available) | none")
       ->check(CLI::IsMember({"auto", "none"}))

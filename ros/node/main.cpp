@@ -10,6 +10,7 @@
 #include <fstream>
 #include <thread>
 
+#include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
 #include "rgbdmap/ros/topic_source.hpp"
@@ -153,6 +154,7 @@ int main(int argc, char** argv) {
   // Before any thread exists, so that all inherit the mask: signals are taken by RunSignals'
   // thread, never by a handler inside ROS or mapping code. ROS's own SIGINT handler is off.
   RunSignals::block();
+  tuneAllocator();
   spdlog::default_logger_raw();
   ros::init(argc, argv, "rgbdmap", ros::init_options::NoSigintHandler);
   RunControl control;

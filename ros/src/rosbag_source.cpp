@@ -167,6 +167,7 @@ ReadStatus RosbagSource::read(Frame& frame) {
   }
   frame.timestamp = pair.color_time;
   frame.has_pose = false;
+  frame.has_up = false;
   frame.origin = topics_.color + " at " + std::to_string(pair.color_time);
   return ReadStatus::kFrame;
 }

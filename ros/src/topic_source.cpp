@@ -197,6 +197,7 @@ ReadStatus TopicSource::read(Frame& frame) {
   }
   frame.timestamp = pair.color_time;
   frame.has_pose = false;
+  frame.has_up = false;
   frame.origin = color_topic_;
   return ReadStatus::kFrame;
 }

@@ -92,6 +92,7 @@ std::string RunStats::toJson() const {
   latency("refuse", refuse_latency, false);
   latency("mesh_extract", mesh_extract_latency, false);
   latency("mesh_write", mesh_write_latency, true);
+  latency("grid_write", grid_write_latency, true);
   out << "  }\n}\n";
   return out.str();
 }
@@ -102,6 +103,13 @@ double peakRssMb() {
   while (std::getline(status, line))
     if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
   return 0.0;
+}
+
+void tuneAllocator() {
+#if defined(__GLIBC__)
+  ::mallopt(M_MMAP_THRESHOLD, 512 * 1024);
+  ::mallopt(M_ARENA_MAX, 2);
+#endif
 }
 
 void releaseFreedMemory() {

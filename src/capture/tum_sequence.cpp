@@ -48,6 +48,8 @@ TumSequence::TumSequence(const std::string& folder, const Options& options)
   const std::vector<ListEntry> depth = readList(folder_, "depth.txt");
   if (isFile(folder_ + "/groundtruth.txt"))
     groundtruth_ = Trajectory::load(folder_ + "/groundtruth.txt");
+  if (isFile(folder_ + "/accelerometer.txt"))
+    accelerometer_ = AccelerometerLog::load(folder_ + "/accelerometer.txt");
 
   std::vector<double> rgb_times, depth_times;
   for (const ListEntry& e : rgb) rgb_times.push_back(e.time);
@@ -190,6 +192,9 @@ bool TumSequence::load(std::size_t i, Frame& frame, std::string& error) {
   frame.timestamp = e.rgb_time;
   frame.has_pose = e.pose.has_value();
   if (e.pose) frame.pose = *e.pose;
+  const std::optional<Eigen::Vector3d> up = accelerometer_.upAt(e.rgb_time);
+  frame.has_up = up.has_value();
+  if (up) frame.up = *up;
   frame.origin = e.rgb_path;
   return true;
 }

@@ -64,6 +64,7 @@ void Mapper::fuse(const Frame& keyframe) {
     refine(refusion_.refusion_pace);
   }
   keyframe_sink_->record(keyframe.timestamp, keyframe.pose, keyframe.anchor);
+  noteUp(keyframe);
   stats_.keyframes.fetch_add(1);
   stats_.map_bytes.store(memoryBytes());
   const auto now = std::chrono::steady_clock::now();
@@ -71,6 +72,17 @@ void Mapper::fuse(const Frame& keyframe) {
     stats_.map_points.store(map_.pointCount(&integrator_.pool()));
     next_count_ = now + kCountPointsEvery;
   }
+}
+
+void Mapper::noteUp(const Frame& keyframe) {
+  // At the pose tracked: a loop's correction turns a keyframe by a fraction of a degree.
+  const Eigen::Matrix3d rotation = keyframe.pose.linear();
+  up_.camera_up -= rotation.col(1);
+  if (keyframe.has_up) {
+    up_.accelerometer_up += rotation * keyframe.up;
+    ++up_.accelerometer_keyframes;
+  }
+  up_.cameras.push_back(keyframe.pose.translation());
 }
 
 bool Mapper::lagsCorrections() {

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <vector>
 
+#include "rgbdmap/runtime/grid_file.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 
@@ -130,13 +131,15 @@ CheckpointWriter::~CheckpointWriter() {
 }
 
 void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
-                              std::vector<TrajectoryFile> trajectories, MeshFile mesh) {
+                              std::vector<TrajectoryFile> trajectories, MeshFile mesh,
+                              GridFile grid) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = std::move(cloud);
     pending_path_ = path;
     pending_trajectories_ = std::move(trajectories);
     pending_mesh_ = std::move(mesh);
+    pending_grid_ = std::move(grid);
   }
   wake_.notify_all();
 }
@@ -160,6 +163,25 @@ void CheckpointWriter::writeMesh(const MeshFile& mesh, Result& result) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+void CheckpointWriter::writeGrid(const MapCloud& cloud, const GridFile& grid, Result& result) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string error;
+  try {
+    const GroundFrame ground = GroundFrame::resolve(cloud, grid.evidence, grid.up);
+    auto built = std::make_shared<OccupancyGrid>(OccupancyGrid::build(cloud, ground, grid.grid));
+    result.ground = ground.describe();
+    if (writeGridAtomically(*built, grid.path, error)) result.grid = std::move(built);
+  } catch (const std::exception& e) {
+    error = grid.path + ": " + e.what();
+  }
+  if (!error.empty()) {
+    result.error += std::string(result.error.empty() ? "" : "; ") + "grid " + error;
+    result.ok = false;
+  }
+  result.grid_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 void CheckpointWriter::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
@@ -171,6 +193,8 @@ void CheckpointWriter::run() {
     pending_trajectories_.clear();
     const MeshFile mesh = std::move(pending_mesh_);
     pending_mesh_ = {};
+    const GridFile grid = std::move(pending_grid_);
+    pending_grid_ = {};
     pending_.reset();
     busy_ = true;
     lock.unlock();
@@ -196,6 +220,7 @@ void CheckpointWriter::run() {
       }
     }
     if (mesh.mesh) writeMesh(mesh, result);
+    if (!grid.path.empty()) writeGrid(*cloud, grid, result);
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     (result.ok ? written_ : failed_).fetch_add(1);

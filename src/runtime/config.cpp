@@ -14,6 +14,8 @@ Keys Config::keys() {
   append(keys, filterKeys(filter));
   append(keys, mapKeys(map));
   append(keys, checkpointKeys(checkpoint));
+  append(keys, upKeys(up));
+  append(keys, gridKeys(grid));
   return sections.insertInto(std::move(keys));
 }
 

@@ -15,6 +15,8 @@ void copyFrame(const Frame& from, Frame& to) {
   to.has_pose = from.has_pose;
   to.pose = from.pose;
   to.anchor = from.anchor;
+  to.has_up = from.has_up;
+  to.up = from.up;
   to.origin.assign(from.origin);
   to.captured_at = from.captured_at;
 }

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/grid_file.hpp"
 
 namespace rgbdmap {
 
@@ -36,13 +37,17 @@ PipelineOutputs outputsBeside(const std::string& map_path, const std::string& me
 
 std::string picturePathOf(const std::string& map_path) { return stem(map_path) + ".png"; }
 
-// The map and the mesh are written atomically; a trajectory is appended to in place, or, with
-// loop closure, spooled and rewritten atomically. The effective configuration is written once,
+// The map, the mesh and the grid are written atomically; a trajectory is appended to in place, or,
+// with loop closure, spooled and rewritten atomically. The effective configuration is written once,
 // before mapping, and needs no temporary file.
 std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs) {
   std::vector<std::string> files;
   for (const std::string* path : {&outputs.map_path, &outputs.mesh_path})
     if (!path->empty()) files.push_back(temporaryFileOf(*path));
+  if (!outputs.grid_path.empty()) {
+    files.push_back(temporaryFileOf(outputs.grid_path));
+    files.push_back(temporaryFileOf(gridYamlPath(outputs.grid_path)));
+  }
   for (const std::string* path : {&outputs.trajectory_path, &outputs.frame_trajectory_path}) {
     if (path->empty()) continue;
     files.push_back(temporaryFileOf(*path));

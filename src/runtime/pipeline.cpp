@@ -75,9 +75,31 @@ CheckpointWriter::MeshFile meshFile(const PipelineOutputs& outputs, const Mapper
   return {std::move(mesh), outputs.mesh_path};
 }
 
-// Counts and logs every write of the checkpoint writer (on its thread).
-CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh_path) {
-  return [&stats, mesh_path](const CheckpointWriter::Result& r) {
+// The occupancy grid written with a checkpoint (--grid): what the map says about up so far, taken
+// on the fusion thread; the writer finds the floor and draws the grid.
+CheckpointWriter::GridFile gridFile(const PipelineOutputs& outputs, const Mapper& mapper,
+                                    const Config& config) {
+  if (outputs.grid_path.empty()) return {};
+  return {outputs.grid_path, mapper.upEvidence(), config.up, config.grid};
+}
+
+// Counts and logs every write of the checkpoint writer (on its thread); where up and the floor
+// came from is logged when it changes.
+CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh_path,
+                                        const std::string& grid_path) {
+  auto last_ground = std::make_shared<std::string>();
+  return [&stats, mesh_path, grid_path, last_ground](const CheckpointWriter::Result& r) {
+    if (!r.ground.empty() && r.ground != *last_ground) {
+      spdlog::info("grid: {}", r.ground);
+      *last_ground = r.ground;
+    }
+    if (r.grid) {
+      stats.grid_write_latency.record(r.grid_seconds);
+      spdlog::info("grid: {}x{} cells of {:.2f} m ({} occupied, {} free) written to {} in {:.2f} s",
+                   r.grid->width, r.grid->height, r.grid->resolution,
+                   r.grid->count(OccupancyGrid::kOccupied), r.grid->count(OccupancyGrid::kFree),
+                   grid_path, r.grid_seconds);
+    }
     if (r.mesh_seconds > 0.0) stats.mesh_write_latency.record(r.mesh_seconds);
     if (r.ok && !mesh_path.empty()) {
       stats.mesh_triangles.store(r.mesh_triangles);
@@ -98,9 +120,11 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
 // memory the run ended with. Returns 1 when the map could not be written, else 0.
 int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
                  const std::vector<CheckpointWriter::TrajectoryFile>& trajectory_files,
-                 MapPublication& publication, const PipelineOutputs& outputs, RunStats& stats) {
+                 MapPublication& publication, const PipelineOutputs& outputs, const Config& config,
+                 RunStats& stats) {
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
-  writer.submit(final_map, outputs.map_path, trajectory_files, meshFile(outputs, mapper, stats));
+  writer.submit(final_map, outputs.map_path, trajectory_files, meshFile(outputs, mapper, stats),
+                gridFile(outputs, mapper, config));
   publication.atEnd(final_map);
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
@@ -164,7 +188,7 @@ int Pipeline::run(RunControl& control) {
   FrameQueue queue(static_cast<std::size_t>(config.queue.capacity),
                    live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
-  CheckpointWriter writer(reportWrites(stats_, outputs_.mesh_path));
+  CheckpointWriter writer(reportWrites(stats_, outputs_.mesh_path, outputs_.grid_path));
   FirstError error;
   const auto fail = [&error, &control](const std::string& message) {
     error.set(message);
@@ -180,10 +204,11 @@ int Pipeline::run(RunControl& control) {
   // Checkpoints: the fusion thread takes the map snapshot and hands it to the writer, which
   // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
-    fusion.request(MapRequest::kCheckpoint, [this, &writer, &trajectory_files](const Mapper& m) {
-      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
-                    meshFile(outputs_, m, stats_));
-    });
+    fusion.request(MapRequest::kCheckpoint,
+                   [this, &writer, &trajectory_files, &config](const Mapper& m) {
+                     writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
+                                   meshFile(outputs_, m, stats_), gridFile(outputs_, m, config));
+                   });
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
   // keyframes (and so the map) independent of timing.
@@ -208,7 +233,8 @@ int Pipeline::run(RunControl& control) {
   // Finish: the final map (at the final corrections: re-fused if the last loops moved kept
   // keyframes), then the exit code.
   mapper.settle();
-  int exit_code = saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, stats_);
+  int exit_code =
+      saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, config, stats_);
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);

@@ -34,6 +34,10 @@ struct Frame {
   // The tracking keyframe the pose was estimated against (-1: none, e.g. ground truth): a loop
   // closure that moves that keyframe moves this pose with it (see PoseCorrections).
   std::int64_t anchor = -1;
+  // The camera's up direction in its own frame, from an accelerometer (TUM's accelerometer.txt);
+  // unset when the source has none or the camera was being shaken.
+  bool has_up = false;
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
   std::string origin;        // where it came from, for messages (a file name or device)
   double captured_at = 0.0;  // steady-clock seconds when the capture thread queued it
 };

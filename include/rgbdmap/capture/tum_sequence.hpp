@@ -7,6 +7,7 @@
 
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/png_decoder.hpp"
+#include "rgbdmap/capture/accelerometer_log.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 
 namespace rgbdmap {
@@ -23,7 +24,8 @@ struct TumEntry {
 };
 
 // A TUM RGB-D sequence folder: rgb.txt and depth.txt associated with TUM's rule and poses
-// interpolated from groundtruth.txt (optional: recordings made by `rgbdmap record` have none).
+// interpolated from groundtruth.txt (optional: recordings made by `rgbdmap record` have none),
+// and the camera's up direction from accelerometer.txt where the folder has one.
 // Behaves like a container of frames; load() decodes one into a reusable Frame.
 class TumSequence {
  public:
@@ -67,6 +69,7 @@ class TumSequence {
   Options options_;
   std::vector<TumEntry> entries_;
   Trajectory groundtruth_;
+  AccelerometerLog accelerometer_;  // empty when the folder has no accelerometer.txt
   std::size_t unmatched_color_ = 0;
   std::size_t unmatched_depth_ = 0;
   std::vector<unsigned char> file_buffer_;  // reused between loads

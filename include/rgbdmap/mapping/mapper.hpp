@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/keyframe_store.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
@@ -58,6 +59,8 @@ class Mapper {
   // The fused keyframes' poses, corrected by the latest loop closures (empty when they went to a
   // sink of the caller's).
   Trajectory keyframeTrajectory() const { return keyframes_.resolve(corrections_); }
+  // What the keyframes fused so far say about which way is up (GroundFrame).
+  const UpEvidence& upEvidence() const { return up_; }
   // The kept keyframes (loop closure only).
   const KeyframeStore& keptKeyframes() const { return store_; }
   // The TSDF's blocks and index, the kept keyframes' images, and while a pass runs the map it
@@ -71,6 +74,7 @@ class Mapper {
   bool lagsCorrections();
   bool refusing() const { return shown_ != nullptr; }
   void integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map);
+  void noteUp(const Frame& keyframe);
 
   KeyframeIntegrator integrator_;
   double voxel_size_;
@@ -89,6 +93,7 @@ class Mapper {
   Frame decoded_;                      // a kept keyframe, decoded for re-fusion
   AnchoredTrajectory keyframes_;
   PoseSink* keyframe_sink_;  // keyframes_ or the caller's
+  UpEvidence up_;
   RunStats& stats_;
   std::chrono::steady_clock::time_point next_count_{};  // when the point count is refreshed
 };

@@ -9,7 +9,9 @@
 #include <thread>
 #include <vector>
 
+#include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/occupancy_grid.hpp"
 #include "rgbdmap/mapping/triangle_mesh.hpp"
 #include "rgbdmap/runtime/trajectory_stream.hpp"
 
@@ -40,6 +42,11 @@ class CheckpointWriter {
     double seconds = 0.0;
     std::size_t mesh_triangles = 0;  // in the mesh written with the map (none: 0)
     double mesh_seconds = 0.0;       // writing it (part of `seconds`)
+    // The occupancy grid written with the map (none: null), how long finding the floor, building
+    // and writing it took (part of `seconds`), and where up and the floor came from.
+    std::shared_ptr<const OccupancyGrid> grid;
+    double grid_seconds = 0.0;
+    std::string ground;
   };
   using Callback = std::function<void(const Result&)>;
   // A trajectory written beside the map in the same checkpoint: what it recorded since the last.
@@ -49,12 +56,21 @@ class CheckpointWriter {
     std::shared_ptr<const TriangleMesh> mesh;  // null: no mesh
     std::string path;
   };
+  // An occupancy grid drawn from the map and written beside it (PGM and YAML, see grid_file.hpp),
+  // on the writer's thread: finding the floor and drawing the grid never holds up mapping.
+  struct GridFile {
+    std::string path;  // "": no grid
+    UpEvidence evidence;
+    UpOptions up;
+    GridOptions grid;
+  };
 
   explicit CheckpointWriter(Callback on_done = nullptr);
   ~CheckpointWriter();  // finishes a pending write, then stops
 
   void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
-              std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {});
+              std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {},
+              GridFile grid = {});
   // Waits until nothing is pending or being written. Returns the last result.
   Result flush();
   std::uint64_t written() const { return written_.load(); }
@@ -63,6 +79,7 @@ class CheckpointWriter {
  private:
   void run();
   void writeMesh(const MeshFile& mesh, Result& result);
+  void writeGrid(const MapCloud& cloud, const GridFile& grid, Result& result);
 
   Callback on_done_;
   std::mutex mutex_;
@@ -71,6 +88,7 @@ class CheckpointWriter {
   std::string pending_path_;
   std::vector<TrajectoryFile> pending_trajectories_;
   MeshFile pending_mesh_;
+  GridFile pending_grid_;
   bool busy_ = false;
   bool stop_ = false;
   Result last_;

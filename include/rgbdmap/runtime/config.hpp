@@ -6,8 +6,10 @@
 #include "rgbdmap/base/option_sections.hpp"
 #include "rgbdmap/capture/camera_options.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
+#include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/keyframe_selector.hpp"
 #include "rgbdmap/mapping/map_options.hpp"
+#include "rgbdmap/mapping/occupancy_grid.hpp"
 #include "rgbdmap/runtime/run_options.hpp"
 #include "rgbdmap/slam/loop_options.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
@@ -33,6 +35,8 @@ struct Config {
   FilterOptions filter;      // filter.*      (mapping)
   MapOptions map;            // map.*         (mapping)
   CheckpointOptions checkpoint;  // checkpoint.*  (runtime)
+  UpOptions up;                  // up.*          (mapping): which way is up, where the floor is
+  GridOptions grid;              // grid.*        (mapping): the occupancy grid (--grid)
   OptionSections sections;       // e.g. ros.*    (registered by adapters)
 
   // Every key, bound to this instance, in the order of docs/configuration.md.
