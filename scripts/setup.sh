@@ -9,13 +9,14 @@ packages=(
   libpcl-dev libopencv-dev libopencv-contrib-dev libeigen3-dev
   libopenni2-dev libfreenect-dev libusb-1.0-0-dev libyaml-cpp-dev libcli11-dev libspdlog-dev
   libboost-dev libgtest-dev libgmock-dev libbenchmark-dev libopenmpi-dev
-  libtsl-hopscotch-map-dev libceres-dev libdeflate-dev
+  libtsl-hopscotch-map-dev libceres-dev libdeflate-dev liboctomap-dev octomap-tools
   libvtk9-dev libx11-dev libgl-dev xvfb ccache
   # ROS 1 Noetic as Debian packages it: the ros/ adapter (rosbag: source, rgbdmap_node) and the
   # tools its tests drive (roscore, rosbag, rostopic).
   ros-core-dev libroscpp-dev librosbag-dev libsensor-msgs-dev libgeometry-msgs-dev
   libstd-srvs-dev libtf2-ros-dev ros-core python3-rosbag python3-rostopic
-  python3-sensor-msgs python3-geometry-msgs python3-std-srvs
+  python3-sensor-msgs python3-geometry-msgs python3-std-srvs libnav-msgs-dev python3-nav-msgs
+  python3-tf2-ros
 )
 if [ "${1:-}" = "--bench" ]; then packages+=(python3-open3d python3-scipy); fi
 missing=()

@@ -31,6 +31,7 @@ struct CommandLine {
   std::string stats_file;
   std::string mesh;
   std::string grid;
+  std::string octomap;
   std::string viewer = "auto";
   bool no_render = false;
   bool quiet = false;
@@ -61,6 +62,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   checkOutputFolder(o.out, "--out");
   if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
   if (!o.grid.empty()) checkOutputFolder(o.grid, "--grid");
+  if (!o.octomap.empty()) checkOutputFolder(o.octomap, "--octomap");
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string& s : o.sets) {
@@ -78,6 +80,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
 
   PipelineOutputs outputs = outputsBeside(o.out, o.mesh);
   outputs.grid_path = o.grid;
+  outputs.octomap_path = o.octomap;
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
@@ -134,6 +137,8 @@ int main(int argc, char** argv) {
   app.add_option("--grid", o.grid,
                  "also write a 2-D occupancy grid for ROS navigation (G.pgm and G.yaml, "
                  "map_server's format), with every save");
+  app.add_option("--octomap", o.octomap,
+                 "also write a binary OctoMap (.bt) of occupied and free space, with every save");
   app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
   app.add_option("--viewer", o.viewer, "live window: auto (when a display is available) | none")
       ->check(CLI::IsMember({"auto", "none"}))

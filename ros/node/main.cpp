@@ -27,6 +27,7 @@ using namespace rgbdmap;
 
 // ~save_map and ~snapshot: ask for a checkpoint as SIGUSR1 does, and answer once it is written
 // (or failed), so that the caller can use the file at once.
+// ~save_octomap answers the same way with the OctoMap (written with every save).
 bool writeMapNow(RunControl& control, const RunStats& stats, const std::string& path,
                  std_srvs::Trigger::Response& response) {
   const auto done = [&] {
@@ -86,6 +87,8 @@ int runNode(RunControl& control, RunSignals& signals) {
       config.pose.source, topics.providesPoses(),
       "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
   PipelineOutputs outputs = outputsBeside(settings.out);
+  outputs.grid_path = settings.grid;
+  outputs.octomap_path = settings.octomap;
   if (!signals.runStarts({temporaryFiles(outputs)})) {
     spdlog::info("stopped during start-up: nothing mapped, no map written");
     topics.shutdown();
@@ -100,6 +103,9 @@ int runNode(RunControl& control, RunSignals& signals) {
   if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
     publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
   publish.map_interval = settings.map_interval;
+  publish.grid_interval = settings.grid_interval;
+  publish.up = config.up;
+  publish.grid = config.grid;
   RosPublisher publisher(pnh, publish);
 
   outputs.status_line = false;
@@ -121,11 +127,19 @@ int runNode(RunControl& control, RunSignals& signals) {
   ros::ServiceServer snapshot =
       service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
           "snapshot", handler);
+  ros::ServiceServer save_octomap =
+      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
+          "save_octomap", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+            writeMapNow(control, pipeline.stats(), settings.octomap, response);
+            if (response.success) response.message = settings.octomap;
+            return true;
+          });
   ros::AsyncSpinner service_spinner(1, &service_queue);
   service_spinner.start();
-  spdlog::info("mapping: publishing {} and {}, TF {} -> {}; services {} and {}",
-               pnh.resolveName("map"), pnh.resolveName("pose"), publish.map_frame,
-               publish.camera_frame, save_map.getService(), snapshot.getService());
+  spdlog::info("mapping: publishing {}, {} and {}, TF {} -> {}; services {}, {} and {}",
+               pnh.resolveName("map"), pnh.resolveName("grid"), pnh.resolveName("pose"),
+               publish.map_frame, publish.camera_frame, save_map.getService(),
+               snapshot.getService(), save_octomap.getService());
 
   const int code = pipeline.run(control);
   topics.shutdown();

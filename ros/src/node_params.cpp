@@ -4,6 +4,7 @@
 #include <set>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -34,6 +35,18 @@ std::string stringParam(const ros::NodeHandle& nh, const std::string& name,
   return text(value, nh.resolveName(name));
 }
 
+double numberParam(const ros::NodeHandle& nh, const std::string& name,
+                   const std::string& fallback) {
+  const std::string value = stringParam(nh, name, fallback);
+  try {
+    std::size_t used = 0;
+    const double number = std::stod(value, &used);
+    if (used == value.size()) return number;
+  } catch (const std::exception&) {
+  }
+  throw InputError("parameter " + nh.resolveName(name) + ": '" + value + "' is not a number");
+}
+
 }  // namespace
 
 NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
@@ -43,15 +56,12 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
   s.stats = stringParam(nh, "stats", "");
   s.map_frame = stringParam(nh, "map_frame", "map");
   s.camera_frame = stringParam(nh, "camera_frame", "");
-  const std::string interval = stringParam(nh, "map_interval", "2");
-  try {
-    s.map_interval = std::stod(interval);
-  } catch (const std::exception&) {
-    throw InputError("parameter " + nh.resolveName("map_interval") + ": '" + interval +
-                     "' is not a number");
-  }
+  s.map_interval = numberParam(nh, "map_interval", "2");
   if (!(s.map_interval >= 0))
     throw InputError("parameter " + nh.resolveName("map_interval") + ": must be >= 0");
+  s.grid_interval = numberParam(nh, "grid_interval", "5");
+  s.grid = stringParam(nh, "grid", "");
+  s.octomap = stringParam(nh, "octomap", stem(s.out) + ".bt");
   return s;
 }
 
@@ -59,8 +69,9 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   // A misspelt parameter would otherwise be ignored in silence, as an unknown --set key is not.
   std::vector<std::string> names;
   const std::string prefix = nh.getNamespace() + "/";
-  const std::set<std::string> settings = {"config",    "out",          "stats",
-                                          "map_frame", "camera_frame", "map_interval"};
+  const std::set<std::string> settings = {"config",        "out",          "stats",
+                                          "map_frame",     "camera_frame", "map_interval",
+                                          "grid_interval", "grid",         "octomap"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
@@ -73,7 +84,7 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
       if (!keys.count(key))
         throw InputError("parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
                          "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
-                         "~camera_frame, ~map_interval)");
+                         "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap)");
     }
   }
   for (const Key& key : config.keys()) {

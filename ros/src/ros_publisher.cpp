@@ -2,8 +2,10 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/PointField.h>
+#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <cstring>
@@ -39,6 +41,8 @@ RosPublisher::RosPublisher(ros::NodeHandle& private_nh, Options options)
   // Latched: a consumer that subscribes later (another machine, a screen) still gets the map.
   map_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>("map", 1, true);
   pose_pub_ = private_nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
+  if (options_.grid_interval >= 0.0)
+    grid_pub_ = private_nh.advertise<nav_msgs::OccupancyGrid>("grid", 1, true);
   thread_ = std::thread([this] { run(); });
 }
 
@@ -76,6 +80,11 @@ void RosPublisher::publishMap(std::shared_ptr<const MapCloud> map) {
   wake_.notify_one();
 }
 
+void RosPublisher::publishUp(const UpEvidence& evidence) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  up_ = evidence;
+}
+
 void RosPublisher::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
@@ -91,13 +100,28 @@ void RosPublisher::run() {
       const std::shared_ptr<const MapCloud> map = std::move(map_);
       map_.reset();
       const double stamp = last_stamp_;
+      const UpEvidence up = up_;
       lock.unlock();
       sendMap(*map, stamp);
+      if (options_.grid_interval >= 0.0) {
+        if (now() >= next_grid_at_) {
+          sendGrid(*map, up, stamp);
+          next_grid_at_ = now() + options_.grid_interval;
+          grid_behind_ = {};
+        } else {
+          grid_behind_ = {map, up, stamp};  // drawn at the end if no later grid replaces it
+        }
+      }
       next_map_at_.store(now() + options_.map_interval);
       map_pending_.store(false);
       lock.lock();
     }
     if (stop_ && poses_.empty() && !map_) break;
+  }
+  // The last map's grid is the one that stays latched.
+  if (grid_behind_.map) {
+    lock.unlock();
+    sendGrid(*grid_behind_.map, grid_behind_.up, grid_behind_.stamp);
   }
 }
 
@@ -124,6 +148,43 @@ void RosPublisher::sendPose(double stamp, const Eigen::Isometry3d& pose) {
   tf.transform.translation.z = t.z();
   tf.transform.rotation = msg.pose.orientation;
   tf_.sendTransform(tf);
+}
+
+void RosPublisher::sendGrid(const MapCloud& map, const UpEvidence& up, double stamp) {
+  GroundFrame ground;
+  OccupancyGrid grid;
+  try {
+    ground = GroundFrame::resolve(map, up, options_.up);
+    grid = OccupancyGrid::build(map, ground, options_.grid);
+  } catch (const std::exception& e) {
+    spdlog::error("grid not published: {}", e.what());
+    return;
+  }
+  if (grid.width == 0) return;  // nothing between the floor and the robot's height yet
+  const std::string described = ground.describe();
+  if (described != last_ground_) {
+    spdlog::info("grid: {}", described);
+    last_ground_ = described;
+  }
+  nav_msgs::OccupancyGrid msg;
+  msg.header.stamp = rosTime(stamp);
+  msg.header.frame_id = options_.map_frame;
+  msg.info.map_load_time = msg.header.stamp;
+  msg.info.resolution = static_cast<float>(grid.resolution);
+  msg.info.width = static_cast<std::uint32_t>(grid.width);
+  msg.info.height = static_cast<std::uint32_t>(grid.height);
+  const Eigen::Quaterniond q(grid.map_from_grid.linear());
+  const Eigen::Vector3d t = grid.map_from_grid.translation();
+  msg.info.origin.position.x = t.x();
+  msg.info.origin.position.y = t.y();
+  msg.info.origin.position.z = t.z();
+  msg.info.origin.orientation.x = q.x();
+  msg.info.origin.orientation.y = q.y();
+  msg.info.origin.orientation.z = q.z();
+  msg.info.origin.orientation.w = q.w();
+  msg.data = grid.cells;  // row-major from the origin, -1 unknown, 0 free, 100 occupied
+  grid_pub_.publish(msg);
+  grids_published_.fetch_add(1);
 }
 
 void RosPublisher::sendMap(const MapCloud& map, double stamp) {

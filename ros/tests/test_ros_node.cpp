@@ -2,6 +2,7 @@
 // rate, this test process as the consumer of what the nodes publish.
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/Image.h>
@@ -39,7 +40,11 @@ struct Received {
   std::atomic<std::uint64_t> largest_map{0};
   std::atomic<std::uint64_t> poses{0};
   std::atomic<bool> map_intact{true};
-  ros::Subscriber map_sub, pose_sub;
+  // The occupancy grid: how many arrived, and the cells of the last one (all of the grid's
+  // values are -1, 0 or 100, its size is width x height, it lies in the map's frame).
+  std::atomic<std::uint64_t> grids{0}, grid_free{0}, grid_occupied{0};
+  std::atomic<bool> grid_intact{true};
+  ros::Subscriber map_sub, pose_sub, grid_sub;
 
   void subscribe(ros::NodeHandle& nh, const std::string& ns) {
     map_sub = nh.subscribe<sensor_msgs::PointCloud2>(
@@ -52,6 +57,22 @@ struct Received {
           const std::uint64_t n = static_cast<std::uint64_t>(m->width) * m->height;
           if (n > largest_map.load()) largest_map.store(n);
           maps.fetch_add(1);
+        });
+    grid_sub = nh.subscribe<nav_msgs::OccupancyGrid>(
+        ns + "/rgbdmap/grid", 2, [this, ns](const nav_msgs::OccupancyGrid::ConstPtr& g) {
+          std::uint64_t free = 0, occupied = 0;
+          bool ok = g->data.size() == static_cast<std::size_t>(g->info.width) * g->info.height &&
+                    g->info.resolution > 0.0f &&
+                    g->header.frame_id == (ns.empty() ? "map" : ns + "/map");
+          for (const std::int8_t c : g->data) {
+            free += c == 0;
+            occupied += c == 100;
+            ok = ok && (c == -1 || c == 0 || c == 100);
+          }
+          if (!ok) grid_intact.store(false);
+          grid_free.store(free);
+          grid_occupied.store(occupied);
+          grids.fetch_add(1);
         });
     pose_sub = nh.subscribe<geometry_msgs::PoseStamped>(
         ns + "/rgbdmap/pose", 100,
@@ -157,6 +178,12 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
   std_srvs::Trigger snapshot;
   ASSERT_TRUE(ros::service::call("/rgbdmap/snapshot", snapshot));
   EXPECT_TRUE(snapshot.response.success) << snapshot.response.message;
+  // ~save_octomap writes the OctoMap beside the map and answers with its path.
+  std_srvs::Trigger octomap;
+  ASSERT_TRUE(ros::service::call("/rgbdmap/save_octomap", octomap));
+  EXPECT_TRUE(octomap.response.success) << octomap.response.message;
+  EXPECT_EQ(octomap.response.message, dir_ + "/map.bt");
+  EXPECT_EQ(readFile(dir_ + "/map.bt").rfind("# Octomap OcTree binary file", 0), 0u);
 
   // Ctrl-C: the final map, exit 0.
   ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
@@ -166,6 +193,14 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
   EXPECT_NE(readFile(node_log).find("map: "), std::string::npos);
   EXPECT_GE(loadMap(dir_ + "/map.pcd").size(), kMapPoints);
   EXPECT_GT(got.maps.load(), maps_before) << "the final map was not published";
+  // The grid, latched: the last one drawn from the final map (a sanitizer build may map too
+  // little of the room for one).
+  EXPECT_TRUE(got.grid_intact.load());
+  if (kRealTime) {
+    ASSERT_TRUE(waitUntil([&] { return got.grids.load() > 0; }, 30)) << readFile(node_log);
+    EXPECT_GT(got.grid_free.load(), 100u);
+    EXPECT_GT(got.grid_occupied.load(), 10u);
+  }
   // A pose for every posed frame (tracked, or relocalised after a loss: a node that drops frames
   // can lose track) at most, but those of the first frames may go out before this consumer's
   // connection to the new publisher is made (ROS drops them: the topic is not latched), and how

@@ -93,6 +93,7 @@ std::string RunStats::toJson() const {
   latency("mesh_extract", mesh_extract_latency, false);
   latency("mesh_write", mesh_write_latency, true);
   latency("grid_write", grid_write_latency, true);
+  latency("octomap_write", octomap_write_latency, true);
   out << "  }\n}\n";
   return out.str();
 }

@@ -33,6 +33,7 @@ Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, cons
       map_(voxel_size_, min_observations_),
       store_(static_cast<std::size_t>(refusion.keyframe_memory * 1024.0 * 1024.0)),
       keyframe_sink_(keyframe_trajectory ? keyframe_trajectory : &keyframes_),
+      camera_(camera),
       stats_(stats) {}
 
 Eigen::Isometry3d Mapper::corrected(const PoseCorrections::Snapshot& correction,
@@ -51,9 +52,11 @@ void Mapper::integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, Vox
 void Mapper::fuse(const Frame& keyframe) {
   if (!corrections_) {
     integrate(keyframe, keyframe.pose, map_);
+    if (free_space_) free_space_->carve(keyframe.depth, camera_, keyframe.pose);
   } else {
     const Eigen::Isometry3d pose =
         corrected(corrections_->snapshot(), keyframe.anchor, keyframe.pose);
+    if (free_space_) free_space_->carve(keyframe.depth, camera_, pose);
     // While a pass runs the keyframe waits for it in the store (fused once, at the pass's poses).
     if (!refusing()) integrate(keyframe, pose, map_);
     for (const std::size_t i : store_.add(keyframe, pose)) {
@@ -153,7 +156,8 @@ void Mapper::settle() {
 std::size_t Mapper::memoryBytes() const {
   return map_.memoryBytes() + store_.memoryBytes() +
          (shown_ ? shown_->size() * sizeof(MapCloud::PointType) : 0) +
-         (shown_mesh_ ? shown_mesh_->memoryBytes() : 0);
+         (shown_mesh_ ? shown_mesh_->memoryBytes() : 0) +
+         (free_space_ ? free_space_->memoryBytes() : 0);
 }
 
 std::shared_ptr<const MapCloud> Mapper::snapshot() const {

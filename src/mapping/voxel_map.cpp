@@ -30,7 +30,7 @@ VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
       min_observations_(std::clamp<std::uint32_t>(min_observations, 1, 255)) {}
 
 std::size_t VoxelMap::memoryBytes() const {
-  return blocks_.size() * sizeof(Block) +
+  return blocks_.capacity() * sizeof(Block) +
          block_index_.bucket_count() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 8);
 }
 
@@ -249,7 +249,8 @@ void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   // The last count and some room: the map may have grown since, and a vector that outgrows its
   // reserve holds old and new arrays at once (a map's worth of points 1.5 times over).
   cloud.reserve(points_ + points_ / 16 + kBlockVoxels);
-  for (const Block& b : blocks_) {
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    const Block& b = blocks_[i];
     if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
     forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
       pcl::PointXYZRGB point;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rgbdmap/runtime/grid_file.hpp"
+#include "rgbdmap/runtime/octomap_file.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/ply_file.hpp"
 
@@ -132,7 +133,7 @@ CheckpointWriter::~CheckpointWriter() {
 
 void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
                               std::vector<TrajectoryFile> trajectories, MeshFile mesh,
-                              GridFile grid) {
+                              GridFile grid, OctomapFile octomap) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = std::move(cloud);
@@ -140,6 +141,7 @@ void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::
     pending_trajectories_ = std::move(trajectories);
     pending_mesh_ = std::move(mesh);
     pending_grid_ = std::move(grid);
+    pending_octomap_ = std::move(octomap);
   }
   wake_.notify_all();
 }
@@ -182,6 +184,23 @@ void CheckpointWriter::writeGrid(const MapCloud& cloud, const GridFile& grid, Re
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+void CheckpointWriter::writeOctomap(const MapCloud& cloud, const OctomapFile& octomap,
+                                    Result& result) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string error;
+  OctomapCounts counts;
+  if (writeOctomapAtomically(cloud, *octomap.free_space, octomap.path, counts, error)) {
+    result.octomap_path = octomap.path;
+    result.octomap_occupied = counts.occupied;
+    result.octomap_free = counts.free;
+  } else {
+    result.error += std::string(result.error.empty() ? "" : "; ") + "OctoMap " + error;
+    result.ok = false;
+  }
+  result.octomap_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 void CheckpointWriter::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
@@ -195,6 +214,8 @@ void CheckpointWriter::run() {
     pending_mesh_ = {};
     const GridFile grid = std::move(pending_grid_);
     pending_grid_ = {};
+    const OctomapFile octomap = std::move(pending_octomap_);
+    pending_octomap_ = {};
     pending_.reset();
     busy_ = true;
     lock.unlock();
@@ -221,6 +242,7 @@ void CheckpointWriter::run() {
     }
     if (mesh.mesh) writeMesh(mesh, result);
     if (!grid.path.empty()) writeGrid(*cloud, grid, result);
+    if (octomap.free_space) writeOctomap(*cloud, octomap, result);
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     (result.ok ? written_ : failed_).fetch_add(1);

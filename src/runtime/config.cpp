@@ -16,6 +16,7 @@ Keys Config::keys() {
   append(keys, checkpointKeys(checkpoint));
   append(keys, upKeys(up));
   append(keys, gridKeys(grid));
+  append(keys, octomapKeys(octomap));
   return sections.insertInto(std::move(keys));
 }
 

@@ -40,13 +40,16 @@ bool MapPublication::mapDue(const RunStats& stats) {
 
 void MapPublication::publishMap(const Mapper& mapper) {
   const double start = now();
+  publisher_->publishUp(mapper.upEvidence());
   publisher_->publishMap(mapper.snapshot());
   const double took = now() - start;
   next_map_at_.store(start + std::max(min_interval_, took / max_share_));
 }
 
-void MapPublication::atEnd(std::shared_ptr<const MapCloud> map) {
-  if (publisher_) publisher_->publishMap(std::move(map));
+void MapPublication::atEnd(std::shared_ptr<const MapCloud> map, const UpEvidence& up) {
+  if (!publisher_) return;
+  publisher_->publishUp(up);
+  publisher_->publishMap(std::move(map));
 }
 
 }  // namespace rgbdmap

@@ -42,7 +42,7 @@ std::string picturePathOf(const std::string& map_path) { return stem(map_path) +
 // before mapping, and needs no temporary file.
 std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs) {
   std::vector<std::string> files;
-  for (const std::string* path : {&outputs.map_path, &outputs.mesh_path})
+  for (const std::string* path : {&outputs.map_path, &outputs.mesh_path, &outputs.octomap_path})
     if (!path->empty()) files.push_back(temporaryFileOf(*path));
   if (!outputs.grid_path.empty()) {
     files.push_back(temporaryFileOf(outputs.grid_path));

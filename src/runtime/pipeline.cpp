@@ -83,6 +83,13 @@ CheckpointWriter::GridFile gridFile(const PipelineOutputs& outputs, const Mapper
   return {outputs.grid_path, mapper.upEvidence(), config.up, config.grid};
 }
 
+// The OctoMap written with a checkpoint (--octomap): the free space seen so far, copied on the
+// fusion thread.
+CheckpointWriter::OctomapFile octomapFile(const PipelineOutputs& outputs, const Mapper& mapper) {
+  if (outputs.octomap_path.empty()) return {};
+  return {mapper.freeSpaceSnapshot(), outputs.octomap_path};
+}
+
 // Counts and logs every write of the checkpoint writer (on its thread); where up and the floor
 // came from is logged when it changes.
 CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh_path,
@@ -99,6 +106,11 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
                    r.grid->width, r.grid->height, r.grid->resolution,
                    r.grid->count(OccupancyGrid::kOccupied), r.grid->count(OccupancyGrid::kFree),
                    grid_path, r.grid_seconds);
+    }
+    if (!r.octomap_path.empty()) {
+      stats.octomap_write_latency.record(r.octomap_seconds);
+      spdlog::info("octomap: {} occupied and {} free leaves written to {} in {:.2f} s",
+                   r.octomap_occupied, r.octomap_free, r.octomap_path, r.octomap_seconds);
     }
     if (r.mesh_seconds > 0.0) stats.mesh_write_latency.record(r.mesh_seconds);
     if (r.ok && !mesh_path.empty()) {
@@ -124,8 +136,8 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
                  RunStats& stats) {
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
   writer.submit(final_map, outputs.map_path, trajectory_files, meshFile(outputs, mapper, stats),
-                gridFile(outputs, mapper, config));
-  publication.atEnd(final_map);
+                gridFile(outputs, mapper, config), octomapFile(outputs, mapper));
+  publication.atEnd(final_map, mapper.upEvidence());
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
   if (!final_write.ok) {
@@ -179,6 +191,7 @@ int Pipeline::run(RunControl& control) {
   Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_,
                 corrections.get(), keyframe_file.get());
   mapper.keepMeshes(!outputs_.mesh_path.empty());
+  if (!outputs_.octomap_path.empty()) mapper.keepFreeSpace(config.octomap);
   spdlog::info("source: {}", source_->describe());
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config.keyframe, config.pose),
@@ -207,7 +220,8 @@ int Pipeline::run(RunControl& control) {
     fusion.request(MapRequest::kCheckpoint,
                    [this, &writer, &trajectory_files, &config](const Mapper& m) {
                      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
-                                   meshFile(outputs_, m, stats_), gridFile(outputs_, m, config));
+                                   meshFile(outputs_, m, stats_), gridFile(outputs_, m, config),
+                                   octomapFile(outputs_, m));
                    });
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of

@@ -80,7 +80,8 @@ struct RunStats {
   // the PLY (writer thread).
   LatencyHistogram mesh_extract_latency;
   LatencyHistogram mesh_write_latency;
-  LatencyHistogram grid_write_latency;  // floor found, grid drawn and written (writer thread)
+  LatencyHistogram grid_write_latency;     // floor found, grid drawn and written (writer thread)
+  LatencyHistogram octomap_write_latency;  // OctoMap built and written (writer thread)
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
   double map_memory_mb = 0.0;      // the map at the end: TSDF blocks and index, kept keyframes
   double kept_keyframes_mb = 0.0;  // of which the kept keyframes' images (loop closure)

@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/keyframe_store.hpp"
@@ -49,6 +50,11 @@ class Mapper {
 
   // Whether meshes are asked for (meshSnapshot()): a pass then keeps the mesh it began from too.
   void keepMeshes(bool keep) { keep_meshes_ = keep; }
+  // Whether an OctoMap is asked for: keyframes then also carve the free space they see through
+  // (FreeSpaceMap), at the resolution given.
+  void keepFreeSpace(const OctomapOptions& options) {
+    free_space_ = std::make_unique<FreeSpaceMap>(options);
+  }
 
   // The map as a point cloud (what a checkpoint writes): one extracted now, or while a pass runs
   // the one it began from.
@@ -59,6 +65,10 @@ class Mapper {
   // The fused keyframes' poses, corrected by the latest loop closures (empty when they went to a
   // sink of the caller's).
   Trajectory keyframeTrajectory() const { return keyframes_.resolve(corrections_); }
+  // A copy of the free space seen so far (null unless keepFreeSpace()).
+  std::shared_ptr<const FreeSpaceMap> freeSpaceSnapshot() const {
+    return free_space_ ? std::make_shared<const FreeSpaceMap>(*free_space_) : nullptr;
+  }
   // What the keyframes fused so far say about which way is up (GroundFrame).
   const UpEvidence& upEvidence() const { return up_; }
   // The kept keyframes (loop closure only).
@@ -94,6 +104,8 @@ class Mapper {
   AnchoredTrajectory keyframes_;
   PoseSink* keyframe_sink_;  // keyframes_ or the caller's
   UpEvidence up_;
+  CameraIntrinsics camera_;
+  std::unique_ptr<FreeSpaceMap> free_space_;
   RunStats& stats_;
   std::chrono::steady_clock::time_point next_count_{};  // when the point count is refreshed
 };

@@ -8,9 +8,9 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <vector>
 
+#include "rgbdmap/base/chunked_vector.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
 
 namespace rgbdmap {
@@ -148,7 +148,9 @@ class VoxelMap {
   std::size_t points_ = 0;
   std::uint64_t integration_ = 0;
   tsl::hopscotch_map<std::uint64_t, std::uint32_t, VoxelKeyHash> block_index_;  // -> blocks_
-  std::deque<Block> blocks_;                  // a deque: growing never copies the blocks there are
+  // 256 blocks (1 MB) a chunk: growing never copies the blocks there are, and a freed map goes
+  // back to the system whole.
+  ChunkedVector<Block, 256> blocks_;
   std::vector<Eigen::Vector3i> coordinates_;  // block coordinates by index (kNoBlock: free)
   std::vector<std::uint32_t> free_;           // pruned slots, reused first
   std::vector<std::uint32_t> touched_;

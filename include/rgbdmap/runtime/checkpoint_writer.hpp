@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/occupancy_grid.hpp"
@@ -47,6 +48,10 @@ class CheckpointWriter {
     std::shared_ptr<const OccupancyGrid> grid;
     double grid_seconds = 0.0;
     std::string ground;
+    // The OctoMap written with the map (none: empty path): its leaves and how long it took.
+    std::string octomap_path;
+    std::size_t octomap_occupied = 0, octomap_free = 0;
+    double octomap_seconds = 0.0;
   };
   using Callback = std::function<void(const Result&)>;
   // A trajectory written beside the map in the same checkpoint: what it recorded since the last.
@@ -64,13 +69,19 @@ class CheckpointWriter {
     UpOptions up;
     GridOptions grid;
   };
+  // An OctoMap of the map and the free space seen (a copy taken on the fusion thread), written
+  // beside it (octomap_file.hpp).
+  struct OctomapFile {
+    std::shared_ptr<const FreeSpaceMap> free_space;  // null: no OctoMap
+    std::string path;
+  };
 
   explicit CheckpointWriter(Callback on_done = nullptr);
   ~CheckpointWriter();  // finishes a pending write, then stops
 
   void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
-              std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {},
-              GridFile grid = {});
+              std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {}, GridFile grid = {},
+              OctomapFile octomap = {});
   // Waits until nothing is pending or being written. Returns the last result.
   Result flush();
   std::uint64_t written() const { return written_.load(); }
@@ -80,6 +91,7 @@ class CheckpointWriter {
   void run();
   void writeMesh(const MeshFile& mesh, Result& result);
   void writeGrid(const MapCloud& cloud, const GridFile& grid, Result& result);
+  void writeOctomap(const MapCloud& cloud, const OctomapFile& octomap, Result& result);
 
   Callback on_done_;
   std::mutex mutex_;
@@ -89,6 +101,7 @@ class CheckpointWriter {
   std::vector<TrajectoryFile> pending_trajectories_;
   MeshFile pending_mesh_;
   GridFile pending_grid_;
+  OctomapFile pending_octomap_;
   bool busy_ = false;
   bool stop_ = false;
   Result last_;

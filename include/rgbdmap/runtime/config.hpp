@@ -6,6 +6,7 @@
 #include "rgbdmap/base/option_sections.hpp"
 #include "rgbdmap/capture/camera_options.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
+#include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/keyframe_selector.hpp"
 #include "rgbdmap/mapping/map_options.hpp"
@@ -37,6 +38,7 @@ struct Config {
   CheckpointOptions checkpoint;  // checkpoint.*  (runtime)
   UpOptions up;                  // up.*          (mapping): which way is up, where the floor is
   GridOptions grid;              // grid.*        (mapping): the occupancy grid (--grid)
+  OctomapOptions octomap;        // octomap.*     (mapping): the OctoMap (--octomap)
   OptionSections sections;       // e.g. ros.*    (registered by adapters)
 
   // Every key, bound to this instance, in the order of docs/configuration.md.

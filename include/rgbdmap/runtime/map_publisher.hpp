@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 
@@ -34,6 +35,9 @@ class MapPublisher {
   // True when the subscriber has taken the last map and would show a new one.
   virtual bool wantsMap() const = 0;
   virtual void publishMap(std::shared_ptr<const MapCloud> map) = 0;
+  // What the map says about up, given just before each map (for a subscriber that draws an
+  // occupancy grid from it); most subscribers ignore it.
+  virtual void publishUp(const UpEvidence& /*evidence*/) {}
 };
 
 // Feeds a publisher (or nothing, when it is null). Frames are published from the tracking
@@ -55,7 +59,7 @@ class MapPublication {
   // Fusion thread: extracts the map and publishes it.
   void publishMap(const Mapper& mapper);
   // The final map, already extracted for the final save.
-  void atEnd(std::shared_ptr<const MapCloud> map);
+  void atEnd(std::shared_ptr<const MapCloud> map, const UpEvidence& up);
 
  private:
   MapPublisher* publisher_;

@@ -22,8 +22,9 @@ struct PipelineOutputs {
   std::string trajectory_path;        // keyframe poses, TUM format ("" = none)
   std::string frame_trajectory_path;  // the pose of every frame, TUM format ("" = none)
   std::string config_path;            // effective configuration ("" = none)
-  std::string mesh_path;  // triangle mesh (binary PLY) written with every map save ("" = none)
-  std::string grid_path;  // occupancy grid (PGM + YAML) written with every map save ("" = none)
+  std::string mesh_path;     // triangle mesh (binary PLY) written with every map save ("" = none)
+  std::string grid_path;     // occupancy grid (PGM + YAML) written with every map save ("" = none)
+  std::string octomap_path;  // binary OctoMap written with every map save ("" = none)
   bool status_line = true;
   MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
 };

@@ -16,6 +16,9 @@ struct NodeSettings {
   std::string map_frame;     // ~map_frame
   std::string camera_frame;  // ~camera_frame ("" = the colour images' frame_id)
   double map_interval = 2;   // ~map_interval: seconds between published maps at least
+  double grid_interval = 5;  // ~grid_interval: seconds between published grids (< 0: no ~grid)
+  std::string grid;          // ~grid: the grid's PGM (and YAML) written with every save ("" = none)
+  std::string octomap;       // ~octomap: the OctoMap written with every save and ~save_octomap
 };
 
 NodeSettings readNodeSettings(const ros::NodeHandle& private_nh);

@@ -11,20 +11,26 @@
 #include <string>
 #include <thread>
 
+#include "rgbdmap/mapping/occupancy_grid.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
 
 namespace rgbdmap {
 
 // The run as ROS sees it, through the same publisher interface as the viewer: ~map
-// (sensor_msgs/PointCloud2, latched, at most every `map_interval` s), ~pose
-// (geometry_msgs/PoseStamped) and TF map_frame -> camera frame. The pipeline's calls only copy
+// (sensor_msgs/PointCloud2, latched, at most every `map_interval` s), ~grid
+// (nav_msgs/OccupancyGrid drawn from that map, latched, at most every `grid_interval` s; its
+// origin is the pose of the grid's corner in map_frame, z up), ~pose (geometry_msgs/PoseStamped)
+// and TF map_frame -> camera frame. The pipeline's calls only copy
 // into a mailbox; a thread of its own converts and publishes, so ROS never slows mapping.
 class RosPublisher : public MapPublisher {
  public:
   struct Options {
     std::string map_frame = "map";
     std::string camera_frame = "camera_rgb_optical_frame";
-    double map_interval = 2.0;  // seconds between maps at most
+    double map_interval = 2.0;   // seconds between maps at most
+    double grid_interval = 5.0;  // seconds between grids at most; negative: no grid
+    UpOptions up;
+    GridOptions grid;
   };
   RosPublisher(ros::NodeHandle& private_nh, Options options);
   ~RosPublisher() override;
@@ -32,18 +38,21 @@ class RosPublisher : public MapPublisher {
   void publishFrame(const Frame& frame, const PublishedStatus& status) override;
   bool wantsMap() const override;
   void publishMap(std::shared_ptr<const MapCloud> map) override;
+  void publishUp(const UpEvidence& evidence) override;
 
   // Publishes what is still waiting (the final map) and stops the thread.
   void finish();
   std::uint64_t mapsPublished() const { return maps_published_.load(); }
+  std::uint64_t gridsPublished() const { return grids_published_.load(); }
 
  private:
   void run();
   void sendPose(double stamp, const Eigen::Isometry3d& pose);
   void sendMap(const MapCloud& map, double stamp);
+  void sendGrid(const MapCloud& map, const UpEvidence& up, double stamp);
 
   Options options_;
-  ros::Publisher map_pub_, pose_pub_;
+  ros::Publisher map_pub_, pose_pub_, grid_pub_;
   tf2_ros::TransformBroadcaster tf_;
 
   mutable std::mutex mutex_;
@@ -56,10 +65,22 @@ class RosPublisher : public MapPublisher {
   std::deque<StampedPose> poses_;
   double last_stamp_ = 0;
   std::shared_ptr<const MapCloud> map_;
+  UpEvidence up_;  // given with map_
+  // The publishing thread's own: when the next grid may go out, the last map sent without its
+  // grid (throttled), and where up and the floor came from (logged when it changes).
+  double next_grid_at_ = 0.0;  // steady-clock seconds
+  struct MapWithoutGrid {
+    std::shared_ptr<const MapCloud> map;
+    UpEvidence up;
+    double stamp = 0.0;
+  };
+  MapWithoutGrid grid_behind_;
+  std::string last_ground_;
   std::atomic<bool> map_pending_{false};
   std::atomic<double> next_map_at_{0.0};  // steady-clock seconds
   bool stop_ = false;
   std::atomic<std::uint64_t> maps_published_{0};
+  std::atomic<std::uint64_t> grids_published_{0};
   std::thread thread_;
 };
 
