@@ -14,6 +14,7 @@
 #include "rgbdmap/capture/accelerometer_log.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
 #include "rgbdmap/mapping/floor_finder.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/occupancy_grid.hpp"
@@ -200,19 +201,25 @@ TEST(OccupancyGrid, DrawsTheSyntheticRoomsFloorPlan) {
   ASSERT_EQ(image.cols, grid.width);
   ASSERT_EQ(image.rows, grid.height);
 
-  // The ground truth's poses put the map in the scene's frame: the floor is z = 0, up is +z.
-  const Eigen::Vector3d up = grid.map_from_grid.linear().col(2);
+  // The grid in the scene's frame (the trajectory aligned to the ground truth: the identity with
+  // the ground truth's poses): the floor is z = 0, up is +z.
+  const Eigen::Isometry3d scene_from_map =
+      absoluteTrajectoryError(Trajectory::load(dir + "/map_keyframes.txt"),
+                              Trajectory::load(room + "/groundtruth.txt"))
+          .alignment;
+  const Eigen::Isometry3d scene_from_grid = scene_from_map * grid.map_from_grid;
+  const Eigen::Vector3d up = scene_from_grid.linear().col(2);
   EXPECT_LT(angleBetween(up, Eigen::Vector3d::UnitZ()), 1.0 * kDegree);
-  EXPECT_NEAR(grid.map_from_grid.translation().z(), 0.0, 0.02);
+  EXPECT_NEAR(scene_from_grid.translation().z(), 0.0, 0.02);
 
   // The truth: the cells of the surfaces the camera saw, in the height band (occupied) and on the
   // floor (seen floor).
   const GridOptions options;
   const SyntheticGroundTruth truth = loadSyntheticGroundTruth(room);
-  const Eigen::Isometry3d grid_from_map = grid.map_from_grid.inverse();
+  const Eigen::Isometry3d grid_from_scene = scene_from_grid.inverse();
   std::set<std::int64_t> occupied, floor;
   for (const auto& p : truth.visible_surface.points) {
-    const Eigen::Vector3d q = grid_from_map * p.getVector3fMap().cast<double>();
+    const Eigen::Vector3d q = grid_from_scene * p.getVector3fMap().cast<double>();
     const int x = static_cast<int>(std::floor(q.x() / grid.resolution));
     const int y = static_cast<int>(std::floor(q.y() / grid.resolution));
     if (p.z >= options.min_height && p.z <= options.max_height) occupied.insert(cellKey(x, y));

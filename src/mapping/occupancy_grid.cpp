@@ -85,6 +85,28 @@ OccupancyGrid OccupancyGrid::build(const MapCloud& map, const GroundFrame& groun
     else if (floor_seen[i] && obstacle_points[i] == 0)  // a speck makes it unknown, not free
       grid.cells[i] = kFree;
   }
+  // The floor seen ends about a cell short of where the camera saw it: the map fuses keyframes,
+  // a few centimetres apart, and the edges of the views between them fall in no keyframe. A cell
+  // next to seen floor, empty itself and next to nothing occupied, is free too.
+  const std::vector<std::int8_t> seen = grid.cells;
+  const auto at = [&](int x, int y) {
+    return seen[static_cast<std::size_t>(y) * static_cast<std::size_t>(grid.width) +
+                static_cast<std::size_t>(x)];
+  };
+  for (int y = 1; y + 1 < grid.height; ++y)
+    for (int x = 1; x + 1 < grid.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(grid.width) +
+                            static_cast<std::size_t>(x);
+      if (seen[i] != kUnknown || obstacle_points[i] > 0) continue;
+      bool next_to_floor = false, next_to_obstacle = false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const std::int8_t c = at(x + dx, y + dy);
+          next_to_obstacle = next_to_obstacle || c == kOccupied;
+          next_to_floor = next_to_floor || (c == kFree && (dx == 0 || dy == 0));
+        }
+      if (next_to_floor && !next_to_obstacle) grid.cells[i] = kFree;
+    }
   return grid;
 }
 
