@@ -281,6 +281,34 @@ void writeGroundTruth(const std::string& folder, const SyntheticScene& scene,
   if (!groundtruth) throw InputError(folder + "/groundtruth.txt: cannot write");
 }
 
+// accelerometer.txt as TUM's Kinect logs it, at the ground truth's rate: the specific force (the
+// path's acceleration, by central differences, minus gravity, 9.81 m/s^2 along the scene's -z)
+// in the camera frame, its x and y negated (the Kinect's axes: AccelerometerLog::upInCamera).
+void writeAccelerometer(const std::string& folder, const CameraPath& path, double duration,
+                        const SyntheticSequenceOptions& options) {
+  const double h = 1.0 / options.groundtruth_rate;
+  const int samples = static_cast<int>(std::ceil(duration * options.groundtruth_rate));
+  std::ofstream out(folder + "/accelerometer.txt");
+  out << "# accelerometer data (rgbdmap synth: the analytic path's specific force)\n"
+      << "# timestamp ax ay az\n";
+  char line[128];
+  for (int k = 0; k <= samples; ++k) {
+    const double t = k * h;
+    const Eigen::Isometry3d pose = path.pose(t);
+    const Eigen::Vector3d acceleration =
+        (path.pose(t + h).translation() - 2.0 * pose.translation() +
+         path.pose(t - h).translation()) /
+        (h * h);
+    const Eigen::Vector3d force =
+        pose.linear().transpose() * (acceleration + Eigen::Vector3d(0.0, 0.0, 9.81));
+    std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f\n", options.start_time + t, -force.x(),
+                  -force.y(), force.z());
+    out << line;
+  }
+  out.flush();
+  if (!out) throw InputError(folder + "/accelerometer.txt: cannot write");
+}
+
 // What the sensor measures of frame `frame`'s ideal depth `depth` (metres, from the renderer):
 // 16-bit depth in `depth16` with the configured errors and noise, the colour noise applied to
 // `color` in place, and in `visible` the pixels an ideal sensor measures (the reference surface).
@@ -343,6 +371,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   const std::unique_ptr<CameraPath> camera_path = makeCameraPath(scene.room(), options, duration);
   const CameraPath& path = *camera_path;
   writeGroundTruth(folder, scene, path, duration, options);
+  writeAccelerometer(folder, path, duration, options);
 
   std::ofstream rgb_list(folder + "/rgb.txt"), depth_list(folder + "/depth.txt");
   rgb_list << "# color images (rgbdmap synth)\n# timestamp filename\n";

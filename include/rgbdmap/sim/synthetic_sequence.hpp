@@ -25,9 +25,9 @@ struct SyntheticSequenceOptions {
   // The camera's path: "orbit" (HandheldPath), "walk" (WalkPath: round the room along its
   // walls, coming back every lap) or "line" (LinePath: once along a wall, never back).
   std::string path = "orbit";
-  double loop_seconds = 12.0;        // one circle (orbit) or lap (walk) of the room
-  double path_radius = 0.0;          // m: of the circle; 0: scaled to the room (HandheldPath)
-  double path_inset = 0.0;           // m from the walls (walk, line); 0: 20% of the room's width
+  double loop_seconds = 12.0;  // one circle (orbit) or lap (walk) of the room
+  double path_radius = 0.0;    // m: of the circle; 0: scaled to the room (HandheldPath)
+  double path_inset = 0.0;     // m from the walls (walk, line); 0: 20% of the room's width
   // Sensor errors that make odometry drift as a real camera's does; 0: an ideal sensor. Depth
   // is measured (1 + depth_scale_error) times too far; the lens' focal lengths are
   // (1 + focal_error) times those declared (`camera`, what the mapper assumes); the colour
@@ -84,7 +84,8 @@ std::unique_ptr<CameraPath> makeCameraPath(const ScenePrimitive& room,
                                            double duration);
 
 // Writes a TUM-layout sequence folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt,
-// scene.yaml, visible_surface.pcd) of `scene` seen along the options' camera path. Deterministic for a
+// accelerometer.txt, scene.yaml, visible_surface.pcd) of `scene` seen along the options' camera
+// path. Deterministic for a
 // seed. Throws InputError if the folder cannot be written or the path would leave free space.
 SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
                                                 const SyntheticScene& scene,
