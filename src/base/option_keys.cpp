@@ -36,17 +36,21 @@ void flatten(const YAML::Node& node, const std::string& prefix,
 
 }  // namespace
 
+bool parseFiniteNumber(const std::string& text, double& value) {
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return used > 0 && used == text.size() && std::isfinite(value);
+}
+
 Key number(const std::string& name, double* field, double lo, double hi, const std::string& help) {
   return {name, help,
           [=](const std::string& text) {
-            std::size_t used = 0;
             double v = 0;
-            try {
-              v = std::stod(text, &used);
-            } catch (const std::exception&) {
-              used = 0;
-            }
-            if (used == 0 || used != text.size() || !std::isfinite(v))
+            if (!parseFiniteNumber(text, v))
               throw std::invalid_argument("'" + text + "' is not a number");
             if (v < lo || v > hi)
               throw std::invalid_argument(text + " is outside [" + formatNumber(lo) + ", " +

@@ -29,14 +29,8 @@ std::optional<Eigen::Vector3d> parseVector(const std::string& text) {
 
 std::optional<double> parseHeight(const std::string& text) {
   if (text == "auto") return std::nullopt;
-  std::size_t used = 0;
   double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(value))
+  if (!parseFiniteNumber(text, value))
     throw std::invalid_argument("up.floor_height must be auto or metres, not '" + text + "'");
   return value;
 }

@@ -19,6 +19,8 @@ struct Key {
 using Keys = std::vector<Key>;
 
 // Keys of each kind, parsing text and checking ranges (inclusive).
+// The whole of `text` as a finite number (false for "", "1x", "nan", "inf").
+bool parseFiniteNumber(const std::string& text, double& value);
 Key number(const std::string& name, double* field, double lo, double hi, const std::string& help);
 Key integer(const std::string& name, int* field, int lo, int hi, const std::string& help);
 Key boolean(const std::string& name, bool* field, const std::string& help);
