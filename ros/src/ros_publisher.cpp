@@ -161,10 +161,9 @@ void RosPublisher::sendGrid(const MapCloud& map, const UpEvidence& up, double st
     return;
   }
   if (grid.width == 0) return;  // nothing between the floor and the robot's height yet
-  const std::string described = ground.describe();
-  if (described != last_ground_) {
-    spdlog::info("grid: {}", described);
-    last_ground_ = described;
+  if (ground.sources() != last_ground_) {
+    spdlog::info("grid: {}", ground.describe());
+    last_ground_ = ground.sources();
   }
   nav_msgs::OccupancyGrid msg;
   msg.header.stamp = rosTime(stamp);

@@ -172,6 +172,7 @@ void CheckpointWriter::writeGrid(const MapCloud& cloud, const GridFile& grid, Re
     const GroundFrame ground = GroundFrame::resolve(cloud, grid.evidence, grid.up);
     auto built = std::make_shared<OccupancyGrid>(OccupancyGrid::build(cloud, ground, grid.grid));
     result.ground = ground.describe();
+    result.ground_sources = ground.sources();
     if (writeGridAtomically(*built, grid.path, error)) result.grid = std::move(built);
   } catch (const std::exception& e) {
     error = grid.path + ": " + e.what();

@@ -91,14 +91,14 @@ CheckpointWriter::OctomapFile octomapFile(const PipelineOutputs& outputs, const 
 }
 
 // Counts and logs every write of the checkpoint writer (on its thread); where up and the floor
-// came from is logged when it changes.
+// came from is logged the first time and whenever it changes.
 CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh_path,
                                         const std::string& grid_path) {
-  auto last_ground = std::make_shared<std::string>();
-  return [&stats, mesh_path, grid_path, last_ground](const CheckpointWriter::Result& r) {
-    if (!r.ground.empty() && r.ground != *last_ground) {
+  auto last_sources = std::make_shared<std::string>();
+  return [&stats, mesh_path, grid_path, last_sources](const CheckpointWriter::Result& r) {
+    if (!r.ground_sources.empty() && r.ground_sources != *last_sources) {
       spdlog::info("grid: {}", r.ground);
-      *last_ground = r.ground;
+      *last_sources = r.ground_sources;
     }
     if (r.grid) {
       stats.grid_write_latency.record(r.grid_seconds);

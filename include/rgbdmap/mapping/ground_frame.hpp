@@ -47,6 +47,13 @@ struct GroundFrame {
   // "up from the floor plane (0.012, -0.998, 0.061), 0.8° from the accelerometer's; floor plane
   // at -1.234 m (48211 points)".
   std::string describe() const;
+  // Where up and the floor came from, without the numbers: what a log compares to say it again
+  // only when it changes.
+  std::string sources() const {
+    return std::to_string(static_cast<int>(up_source)) + "/" +
+           std::to_string(static_cast<int>(guess_source)) + "/" +
+           std::to_string(static_cast<int>(floor_source));
+  }
 
   // The floor is the largest level plane below the cameras, level as the best guess of up says:
   // configured, else the accelerometer's, else the cameras' -y axes. Up is then the configured

@@ -47,7 +47,8 @@ class CheckpointWriter {
     // and writing it took (part of `seconds`), and where up and the floor came from.
     std::shared_ptr<const OccupancyGrid> grid;
     double grid_seconds = 0.0;
-    std::string ground;
+    std::string ground;          // GroundFrame::describe()
+    std::string ground_sources;  // GroundFrame::sources()
     // The OctoMap written with the map (none: empty path): its leaves and how long it took.
     std::string octomap_path;
     std::size_t octomap_occupied = 0, octomap_free = 0;
