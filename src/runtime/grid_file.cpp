@@ -164,6 +164,10 @@ OccupancyGrid readGrid(const std::string& yaml_path) {
   in >> max_value;
   if (magic != "P5" || !in || grid.width <= 0 || grid.height <= 0 || max_value != 255)
     throw InputError(pgm_path + ": not an 8-bit binary PGM (P5, maximum 255)");
+  // 2^28 cells is a 800 m square at 5 cm: a larger header is a corrupt file, not a map.
+  if (static_cast<double>(grid.width) * grid.height > static_cast<double>(1 << 28))
+    throw InputError(pgm_path + ": " + std::to_string(grid.width) + "x" +
+                     std::to_string(grid.height) + " cells is more than a grid can hold");
   in.get();  // the one whitespace byte before the pixels
   std::string pixels(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height),
                      '\0');
