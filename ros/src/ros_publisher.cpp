@@ -183,7 +183,6 @@ void RosPublisher::sendGrid(const MapCloud& map, const UpEvidence& up, double st
   msg.info.origin.orientation.w = q.w();
   msg.data = grid.cells;  // row-major from the origin, -1 unknown, 0 free, 100 occupied
   grid_pub_.publish(msg);
-  grids_published_.fetch_add(1);
 }
 
 void RosPublisher::sendMap(const MapCloud& map, double stamp) {

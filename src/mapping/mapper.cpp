@@ -50,13 +50,13 @@ void Mapper::integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, Vox
 }
 
 void Mapper::fuse(const Frame& keyframe) {
+  const Eigen::Isometry3d pose =
+      corrections_ ? corrected(corrections_->snapshot(), keyframe.anchor, keyframe.pose)
+                   : keyframe.pose;
+  if (free_space_) free_space_->carve(keyframe.depth, camera_, pose);
   if (!corrections_) {
-    integrate(keyframe, keyframe.pose, map_);
-    if (free_space_) free_space_->carve(keyframe.depth, camera_, keyframe.pose);
+    integrate(keyframe, pose, map_);
   } else {
-    const Eigen::Isometry3d pose =
-        corrected(corrections_->snapshot(), keyframe.anchor, keyframe.pose);
-    if (free_space_) free_space_->carve(keyframe.depth, camera_, pose);
     // While a pass runs the keyframe waits for it in the store (fused once, at the pass's poses).
     if (!refusing()) integrate(keyframe, pose, map_);
     for (const std::size_t i : store_.add(keyframe, pose)) {

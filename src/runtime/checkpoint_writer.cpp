@@ -152,17 +152,29 @@ CheckpointWriter::Result CheckpointWriter::flush() {
   return last_;
 }
 
+namespace {
+
+// A part of the checkpoint that failed: said after what failed before it, and the write not ok.
+void addFailure(CheckpointWriter::Result& result, const std::string& message) {
+  result.error += (result.error.empty() ? "" : "; ") + message;
+  result.ok = false;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
 void CheckpointWriter::writeMesh(const MeshFile& mesh, Result& result) {
   const auto start = std::chrono::steady_clock::now();
   std::string error;
   if (writePlyAtomically(*mesh.mesh, mesh.path, error)) {
     result.mesh_triangles = mesh.mesh->triangles.size();
   } else {
-    result.error += std::string(result.error.empty() ? "" : "; ") + "mesh " + error;
-    result.ok = false;
+    addFailure(result, "mesh " + error);
   }
-  result.mesh_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.mesh_seconds = secondsSince(start);
 }
 
 void CheckpointWriter::writeGrid(const MapCloud& cloud, const GridFile& grid, Result& result) {
@@ -177,12 +189,8 @@ void CheckpointWriter::writeGrid(const MapCloud& cloud, const GridFile& grid, Re
   } catch (const std::exception& e) {
     error = grid.path + ": " + e.what();
   }
-  if (!error.empty()) {
-    result.error += std::string(result.error.empty() ? "" : "; ") + "grid " + error;
-    result.ok = false;
-  }
-  result.grid_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!error.empty()) addFailure(result, "grid " + error);
+  result.grid_seconds = secondsSince(start);
 }
 
 void CheckpointWriter::writeOctomap(const MapCloud& cloud, const OctomapFile& octomap,
@@ -195,11 +203,9 @@ void CheckpointWriter::writeOctomap(const MapCloud& cloud, const OctomapFile& oc
     result.octomap_occupied = counts.occupied;
     result.octomap_free = counts.free;
   } else {
-    result.error += std::string(result.error.empty() ? "" : "; ") + "OctoMap " + error;
-    result.ok = false;
+    addFailure(result, "OctoMap " + error);
   }
-  result.octomap_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.octomap_seconds = secondsSince(start);
 }
 
 void CheckpointWriter::run() {
@@ -236,16 +242,12 @@ void CheckpointWriter::run() {
       result.error += "; no complete map has been written to " + path + " yet";
     for (const TrajectoryFile& t : trajectories) {
       std::string error;
-      if (!t->persist(error)) {
-        result.error += (result.error.empty() ? "" : "; ") + error;
-        result.ok = false;
-      }
+      if (!t->persist(error)) addFailure(result, error);
     }
     if (mesh.mesh) writeMesh(mesh, result);
     if (!grid.path.empty()) writeGrid(*cloud, grid, result);
     if (octomap.free_space) writeOctomap(*cloud, octomap, result);
-    result.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.seconds = secondsSince(start);
     (result.ok ? written_ : failed_).fetch_add(1);
     if (on_done_) on_done_(result);
 

@@ -43,7 +43,6 @@ class RosPublisher : public MapPublisher {
   // Publishes what is still waiting (the final map) and stops the thread.
   void finish();
   std::uint64_t mapsPublished() const { return maps_published_.load(); }
-  std::uint64_t gridsPublished() const { return grids_published_.load(); }
 
  private:
   void run();
@@ -80,7 +79,6 @@ class RosPublisher : public MapPublisher {
   std::atomic<double> next_map_at_{0.0};  // steady-clock seconds
   bool stop_ = false;
   std::atomic<std::uint64_t> maps_published_{0};
-  std::atomic<std::uint64_t> grids_published_{0};
   std::thread thread_;
 };
 
