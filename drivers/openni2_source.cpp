@@ -13,6 +13,8 @@
 #include "openni2/reconnect_backoff.hpp"
 #include "openni2/runtime.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/capture/accelerometer_log.hpp"
+#include "rgbdmap/drivers/kinect_accelerometer.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -59,6 +61,7 @@ class OpenNI2Source : public FrameSource {
   void open(const std::string& uri, bool diagnose);
   void close();
   void pace(double stamp);
+  void readUp(Frame& frame);
 
   // Declared first so that it is released last: OpenNI2 shuts down after
   // everything below.
@@ -72,6 +75,7 @@ class OpenNI2Source : public FrameSource {
                             // Frame::origin (kept while closed)
   std::string name_;        // vendor and model
   bool is_file_ = false;
+  bool has_accelerometer_ = false;  // the Kinect driver with its motor's device
   bool open_ = false;
   bool ever_opened_ = false;
   std::unique_ptr<OpenDevice> dev_;  // null while closed
@@ -105,6 +109,7 @@ void OpenNI2Source::open(const std::string& uri, bool diagnose) {
   if (!ever_opened_) camera_ = camera;
   dev_ = std::move(dev);
   is_file_ = dev_->isFile();
+  has_accelerometer_ = dev_->device().isPropertySupported(kKinectAccelerationProperty);
   label_ = dev_->label();
   name_ = dev_->name();
   depth_total_ = dev_->depthTotal();
@@ -220,11 +225,28 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
     return ReadStatus::kSkipped;
   }
   frame.has_pose = false;
-  frame.has_up = false;
+  readUp(frame);
   frame.origin = label();
   backoff_.reset();  // frames flow: the next outage starts backing off afresh
   if (is_file_ && rate_ > 0) pace(frame.timestamp);
   return ReadStatus::kFrame;
+}
+
+// The camera's up from its accelerometer where the driver offers one: the sample read after the
+// latest depth frame (within a frame of this pair; the mapper averages over keyframes).
+void OpenNI2Source::readUp(Frame& frame) {
+  frame.has_up = false;
+  if (!has_accelerometer_) return;
+  KinectAcceleration sample;
+  int size = sizeof sample;
+  if (dev_->device().getProperty(kKinectAccelerationProperty, &sample, &size) !=
+          openni::STATUS_OK ||
+      size != static_cast<int>(sizeof sample))
+    return;
+  if (const auto up = AccelerometerLog::upFromSample({sample.x, sample.y, sample.z})) {
+    frame.has_up = true;
+    frame.up = *up;
+  }
 }
 
 // Releases recorded frames at their recorded spacing divided by replay.rate.

@@ -8,12 +8,15 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
+#include "rgbdmap/capture/accelerometer_log.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/drivers/kinect_accelerometer.hpp"
 #include "rgbdmap/drivers/kinect_v1_model.hpp"
 #include "test_support.hpp"
 
@@ -97,19 +100,36 @@ TEST_F(OpenNI2Freenect, DumpHoldsEveryFrameAsRawDisparityAndRgb) {
   std::vector<std::string> files;
   for (std::string line; std::getline(index, line);) files.push_back(line);
   const TumSequence sequence(test::tumDir(kXyz));
-  ASSERT_EQ(files.size(), 2 * sequence.size());
+  const AccelerometerLog log = AccelerometerLog::load(test::tumDir(kXyz) + "/accelerometer.txt");
+  // Per frame: the accelerometer's record (fr1/xyz has one for every frame), depth, colour.
+  ASSERT_EQ(files.size(), 3 * sequence.size());
   for (std::size_t i = 0; i < files.size(); ++i) {
-    EXPECT_EQ(files[i][0], i % 2 == 0 ? 'd' : 'r') << files[i];
+    const std::size_t frame = i / 3;
+    EXPECT_EQ(files[i][0], "adr"[i % 3]) << files[i];
     const std::string data = test::readFile(dump + "/" + files[i]);
-    const std::string header = i % 2 == 0 ? "P5 640 480 65535\n" : "P6 640 480 255\n";
+    if (i % 3 == 0) {
+      // libfreenect's raw tilt state: counts of 1/819 g giving the folder's up.
+      ASSERT_EQ(data.size(), sizeof(FakenectTiltState)) << files[i];
+      FakenectTiltState state;
+      std::memcpy(&state, data.data(), sizeof state);
+      const KinectAcceleration a = KinectAcceleration::fromCounts(
+          state.accelerometer_x, state.accelerometer_y, state.accelerometer_z);
+      const auto up = AccelerometerLog::upFromSample({a.x, a.y, a.z});
+      const auto truth = log.upAt(sequence[frame].rgb_time);
+      ASSERT_TRUE(up && truth) << files[i];
+      EXPECT_LT(std::acos(std::min(1.0, up->dot(*truth))) * 180 / M_PI, 0.2) << files[i];
+      continue;
+    }
+    const std::string header = i % 3 == 1 ? "P5 640 480 65535\n" : "P6 640 480 255\n";
     ASSERT_EQ(data.substr(0, header.size()), header) << files[i];
-    EXPECT_EQ(data.size(), header.size() + 640u * 480u * (i % 2 == 0 ? 2u : 3u)) << files[i];
+    EXPECT_EQ(data.size(), header.size() + 640u * 480u * (i % 3 == 1 ? 2u : 3u)) << files[i];
   }
 }
 
 // Frames delivered through fakenect -> driver -> OpenNI2 -> rgbdmap match the folder: colour
 // exactly, depth within the disparity quantisation; the end of the dump is reported as an
-// unplug. Recorded back as a TUM folder by `rgbdmap record --source openni2`.
+// unplug; the accelerometer comes through the driver's device property. Recorded back as a TUM
+// folder by `rgbdmap record --source openni2`.
 TEST_F(OpenNI2Freenect, FramesThroughTheKinectDriverMatchTheFolder) {
 #ifdef __SANITIZE_THREAD__
   GTEST_SKIP() << "under ThreadSanitizer fakenect delivers no frame to the driver within the read "
@@ -135,6 +155,11 @@ TEST_F(OpenNI2Freenect, FramesThroughTheKinectDriverMatchTheFolder) {
   std::vector<cv::Mat> folder_colors;
   for (std::size_t j = 0; j < folder.size(); ++j)
     folder_colors.push_back(cv::imread(folder[j].rgb_path, cv::IMREAD_UNCHANGED));
+  const AccelerometerLog folder_log =
+      AccelerometerLog::load(test::tumDir(kXyz) + "/accelerometer.txt");
+  ASSERT_TRUE(fs::exists(dir + "/rec/accelerometer.txt")) << log;
+  const AccelerometerLog recorded_log = AccelerometerLog::load(dir + "/rec/accelerometer.txt");
+  EXPECT_EQ(recorded_log.size(), recorded.size());
   std::size_t previous = 0;
   for (std::size_t i = 0; i < recorded.size(); ++i) {
     const cv::Mat color = cv::imread(recorded[i].rgb_path, cv::IMREAD_UNCHANGED);
@@ -145,6 +170,13 @@ TEST_F(OpenNI2Freenect, FramesThroughTheKinectDriverMatchTheFolder) {
       EXPECT_GT(j, previous) << i;
     }
     previous = j;
+    // Up: the driver's sample is read after the pair's depth frame, so it may be the next
+    // frame's (fr1/xyz turns slowly: well under a degree a frame).
+    const auto recorded_up = recorded_log.upAt(recorded[i].rgb_time, 1e-4);
+    const auto folder_up = folder_log.upAt(folder[j].rgb_time);
+    ASSERT_TRUE(recorded_up && folder_up) << "recorded frame " << i;
+    EXPECT_LT(std::acos(std::min(1.0, recorded_up->dot(*folder_up))) * 180 / M_PI, 1.0)
+        << "frame " << j;
     // Depth: the recorded pair's, within the disparity step at that depth (plus the 0.1 mm of
     // the stream and TUM's 0.2 mm units); shifted pixels hidden behind nearer ones are lost.
     const cv::Mat depth = cv::imread(recorded[i].depth_path, cv::IMREAD_UNCHANGED);

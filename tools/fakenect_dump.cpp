@@ -1,12 +1,15 @@
 #include "rgbdmap/tools/fakenect_dump.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/capture/accelerometer_log.hpp"
+#include "rgbdmap/drivers/kinect_accelerometer.hpp"
 
 namespace rgbdmap {
 
@@ -64,6 +67,20 @@ void FakenectDump::add(const Frame& frame) {
                 static_cast<unsigned long long>(frames_));
   std::snprintf(colour_name, sizeof colour_name, "r-%.6f-%llu-rgb.ppm", frame.timestamp,
                 static_cast<unsigned long long>(frames_));
+  if (frame.has_up) {
+    // The accelerometer's reading at rest with this up (the log's samples are averaged into a
+    // direction; 1 g is written), just before the depth frame it goes with.
+    const Eigen::Vector3d counts =
+        AccelerometerLog::upInCamera(frame.up.normalized()) * KinectAcceleration::kCountsPerG;
+    FakenectTiltState state;
+    state.accelerometer_x = static_cast<std::int16_t>(std::lround(counts.x()));
+    state.accelerometer_y = static_cast<std::int16_t>(std::lround(counts.y()));
+    state.accelerometer_z = static_cast<std::int16_t>(std::lround(counts.z()));
+    char accel_name[96];
+    std::snprintf(accel_name, sizeof accel_name, "a-%.6f-%llu-accel.dump", frame.timestamp,
+                  static_cast<unsigned long long>(frames_));
+    writeFile(accel_name, "", &state, sizeof state);
+  }
   writeFile(depth_name, "P5 640 480 65535\n", bytes.data(), bytes.size());
   writeFile(colour_name, "P6 640 480 255\n", rgb.data, rgb.total() * rgb.elemSize());
   ++frames_;

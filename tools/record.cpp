@@ -8,9 +8,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
+#include "rgbdmap/capture/accelerometer_log.hpp"
+#include "rgbdmap/drivers/kinect_accelerometer.hpp"
 #include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
@@ -37,13 +40,14 @@ struct RecordOptions {
 // interrupted recording still has lists that match its images.
 class TumList {
  public:
-  TumList(const std::string& path, const std::string& what, const std::string& origin)
+  TumList(const std::string& path, const std::string& what, const std::string& origin,
+          const std::string& columns = "timestamp filename")
       : path_(path), out_(path) {
-    out_ << "# " << what << "\n# file: '" << origin << "'\n# timestamp filename\n";
+    out_ << "# " << what << "\n# file: '" << origin << "'\n# " << columns << "\n";
     check();
   }
-  void add(const std::string& stamp, const std::string& file) {
-    out_ << stamp << ' ' << file << '\n';
+  void add(const std::string& stamp, const std::string& fields) {
+    out_ << stamp << ' ' << fields << '\n';
     out_.flush();
     check();
   }
@@ -159,6 +163,7 @@ int record(const RecordOptions& o) {
   spdlog::info("recording {} into {}", origin, o.out);
   TumList rgb_list((out / "rgb.txt").string(), "color images", origin);
   TumList depth_list((out / "depth.txt").string(), "depth maps", origin);
+  std::optional<TumList> accelerometer;  // from the first frame that knows its up
 
   Frame frame;
   cv::Mat depth_units;
@@ -196,6 +201,17 @@ int record(const RecordOptions& o) {
     writePng(depth_units, partialImageIn(out), out / depth_file);
     rgb_list.add(stamp, rgb_file);
     depth_list.add(stamp, depth_file);
+    if (frame.has_up) {
+      if (!accelerometer)
+        accelerometer.emplace((out / "accelerometer.txt").string(), "accelerometer data", origin,
+                              "timestamp ax ay az");
+      // At rest, as TUM's: the reaction to gravity (1 g) in the Kinect accelerometer's axes.
+      const Eigen::Vector3d a =
+          AccelerometerLog::upInCamera(frame.up.normalized()) * KinectAcceleration::kGravity;
+      char fields[96];
+      std::snprintf(fields, sizeof fields, "%.6f %.6f %.6f", a.x(), a.y(), a.z());
+      accelerometer->add(stamp, fields);
+    }
     ++written;
   }
   if (too_far > 0)

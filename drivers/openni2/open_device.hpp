@@ -48,6 +48,7 @@ class OpenDevice {
   // Set once OpenNI2 reports this device unplugged (null when it cannot tell).
   const DisconnectWatch* watch() const { return watch_.get(); }
 
+  openni::Device& device() { return device_; }
   openni::VideoStream& depth() { return depth_; }
   openni::VideoStream& color() { return color_; }
   openni::VideoFrameRef& depthFrame() { return depth_frame_; }

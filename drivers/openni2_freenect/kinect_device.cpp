@@ -8,6 +8,9 @@
 namespace rgbdmap::openni2_freenect {
 namespace {
 
+static_assert(sizeof(freenect_raw_tilt_state) == sizeof(FakenectTiltState),
+              "record --format fakenect writes accelerometer records of this size");
+
 template <typename T>
 OniStatus readValue(const void* data, int size, T& value) {
   if (data == nullptr || size != static_cast<int>(sizeof(T))) return ONI_STATUS_BAD_PARAMETER;
@@ -26,8 +29,13 @@ KinectDevice::KinectDevice(int index, std::function<void()> on_unplugged)
   sensors_[0] = {ONI_SENSOR_DEPTH, static_cast<int>(depth_modes_.size()), depth_modes_.data()};
   sensors_[1] = {ONI_SENSOR_COLOR, static_cast<int>(color_modes_.size()), color_modes_.data()};
   if (freenect_init(&context_, nullptr) < 0) throw std::runtime_error("libfreenect cannot start");
-  freenect_select_subdevices(context_, FREENECT_DEVICE_CAMERA);
-  if (freenect_open_device(context_, &device_, index) < 0) {
+  // With the motor's device when it opens (it holds the accelerometer); some Kinects (model
+  // 1473) and some USB set-ups refuse it, and the cameras still work without.
+  freenect_select_subdevices(
+      context_, static_cast<freenect_device_flags>(FREENECT_DEVICE_CAMERA | FREENECT_DEVICE_MOTOR));
+  has_motor_ = freenect_open_device(context_, &device_, index) >= 0;
+  if (!has_motor_) freenect_select_subdevices(context_, FREENECT_DEVICE_CAMERA);
+  if (!has_motor_ && freenect_open_device(context_, &device_, index) < 0) {
     freenect_shutdown(context_);
     throw std::runtime_error("libfreenect cannot open Kinect " + std::to_string(index) +
                              " (unplugged, or in use by another program?)");
@@ -99,6 +107,14 @@ OniStatus KinectDevice::setProperty(int property, const void* data, int size) {
 }
 
 OniStatus KinectDevice::getProperty(int property, void* data, int* size) {
+  if (property == kKinectAccelerationProperty && has_motor_) {
+    if (data == nullptr || size == nullptr || *size != static_cast<int>(sizeof acceleration_))
+      return ONI_STATUS_BAD_PARAMETER;
+    std::lock_guard<std::mutex> lock(acceleration_mutex_);
+    if (!has_acceleration_) return ONI_STATUS_NO_DEVICE;  // no depth frame yet
+    std::memcpy(data, &acceleration_, sizeof acceleration_);
+    return ONI_STATUS_OK;
+  }
   if (property != ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION) return ONI_STATUS_NOT_IMPLEMENTED;
   const OniImageRegistrationMode mode =
       registered_.load() ? ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR : ONI_IMAGE_REGISTRATION_OFF;
@@ -109,6 +125,7 @@ OniStatus KinectDevice::getProperty(int property, void* data, int* size) {
 }
 
 OniBool KinectDevice::isPropertySupported(int property) {
+  if (property == kKinectAccelerationProperty) return has_motor_ ? TRUE : FALSE;
   return property == ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION ? TRUE : FALSE;
 }
 
@@ -178,11 +195,26 @@ void KinectDevice::runEvents() {
       on_unplugged_();
       return;
     }
+    if (has_motor_ && depth_arrived_.exchange(false)) readAccelerometer();
   }
+}
+
+// Once per depth frame, outside libfreenect's callbacks: the read is a blocking USB control
+// transfer on the motor's device (fakenect instead replays the dump's last 'a' record).
+void KinectDevice::readAccelerometer() {
+  if (freenect_update_tilt_state(device_) < 0) return;
+  freenect_raw_tilt_state* state = freenect_get_tilt_state(device_);
+  if (state == nullptr) return;
+  KinectAcceleration sample;
+  freenect_get_mks_accel(state, &sample.x, &sample.y, &sample.z);
+  std::lock_guard<std::mutex> lock(acceleration_mutex_);
+  acceleration_ = sample;
+  has_acceleration_ = true;
 }
 
 void KinectDevice::onDepth(freenect_device* device, void* data, std::uint32_t /*timestamp*/) {
   auto* self = static_cast<KinectDevice*>(freenect_get_user(device));
+  self->depth_arrived_.store(true);
   std::lock_guard<std::mutex> lock(self->mutex_);
   if (self->depth_) self->depth_->deliverRaw(static_cast<const std::uint16_t*>(data));
 }

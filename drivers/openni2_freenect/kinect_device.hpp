@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "kinect_streams.hpp"
+#include "rgbdmap/drivers/kinect_accelerometer.hpp"
 #include "rgbdmap/drivers/kinect_v1_model.hpp"
 
 namespace rgbdmap::openni2_freenect {
@@ -20,7 +21,9 @@ namespace rgbdmap::openni2_freenect {
 // 11-bit depth and RGB at 640x480, 30 fps, converted and registered here (fakenect offers
 // nothing else, so one path serves both). An event thread runs libfreenect while a stream runs;
 // when libfreenect reports the device gone (unplugged, or the end of a fakenect dump) the
-// streams stop delivering and `on_unplugged` tells OpenNI2.
+// streams stop delivering and `on_unplugged` tells OpenNI2. The accelerometer (in the tilt
+// motor's USB device, opened when it can be) is read after every depth frame and offered as the
+// kKinectAccelerationProperty.
 class KinectDevice : public oni::driver::DeviceBase, private StreamHost {
  public:
   // Throws std::runtime_error when libfreenect cannot open device `index`.
@@ -42,6 +45,7 @@ class KinectDevice : public oni::driver::DeviceBase, private StreamHost {
   void streamStopped(OniSensorType type) override;
   bool registered() const override { return registered_.load(); }
   void runEvents();
+  void readAccelerometer();
   void stopEvents();
   static void onDepth(freenect_device* device, void* data, std::uint32_t timestamp);
   static void onVideo(freenect_device* device, void* data, std::uint32_t timestamp);
@@ -58,6 +62,11 @@ class KinectDevice : public oni::driver::DeviceBase, private StreamHost {
   freenect_device* device_ = nullptr;
   std::atomic<bool> registered_{false};
   std::atomic<bool> gone_{false};
+  bool has_motor_ = false;                  // the accelerometer can be read
+  std::atomic<bool> depth_arrived_{false};  // since the accelerometer was last read
+  std::mutex acceleration_mutex_;
+  bool has_acceleration_ = false;
+  KinectAcceleration acceleration_;
 
   std::mutex mutex_;  // streams, what runs, the event thread
   std::condition_variable changed_;

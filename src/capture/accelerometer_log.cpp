@@ -47,9 +47,12 @@ std::optional<Eigen::Vector3d> AccelerometerLog::upAt(double t, double window) c
   for (; it != stamps_.end() && *it <= t + window; ++it, ++n)
     sum += samples_[static_cast<std::size_t>(it - stamps_.begin())];
   if (n == 0) return std::nullopt;
-  const Eigen::Vector3d mean = sum / n;
-  if (std::abs(mean.norm() - kGravity) > kMaxDeviation) return std::nullopt;
-  return upInCamera(mean).normalized();
+  return upFromSample(sum / n);
+}
+
+std::optional<Eigen::Vector3d> AccelerometerLog::upFromSample(const Eigen::Vector3d& sample) {
+  if (std::abs(sample.norm() - kGravity) > kMaxDeviation) return std::nullopt;
+  return upInCamera(sample).normalized();
 }
 
 }  // namespace rgbdmap

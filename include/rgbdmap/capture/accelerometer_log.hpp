@@ -25,6 +25,9 @@ class AccelerometerLog {
   // when no sample is that close or the samples are not about 1 g (the camera was shaken).
   std::optional<Eigen::Vector3d> upAt(double t, double window = 0.05) const;
 
+  // The up direction from one sample (or a mean of samples), none when it is not about 1 g.
+  static std::optional<Eigen::Vector3d> upFromSample(const Eigen::Vector3d& sample);
+
   // The Kinect's accelerometer axes against the camera's: x and y as the optical frame, z
   // reversed, and gravity measured as pointing down. (TUM's fr1 sequences: the ground-truth
   // orientation maps (-ax, -ay, az) onto the motion-capture frame's up within 5 degrees.)

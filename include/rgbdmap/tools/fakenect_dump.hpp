@@ -15,7 +15,8 @@ namespace rgbdmap {
 // each name is "<type>-<seconds>-<device stamp>-<anything>", which fakenect parses for the
 // type ('d' depth, 'r' colour) and the time it paces playback by. Depth files are "P5 640 480
 // 65535\n" and the raw 11-bit disparity (KinectV1Model, unregistered to the IR camera's view) as
-// little-endian 16-bit words; colour files "P6 640 480 255\n" and RGB bytes.
+// little-endian 16-bit words; colour files "P6 640 480 255\n" and RGB bytes; accelerometer files
+// ('a', before the depth of a frame that knows its up) libfreenect's raw tilt state.
 class FakenectDump {
  public:
   // Creates `dir` (refused when it already holds an INDEX.txt). Throws InputError naming it.
