@@ -245,15 +245,15 @@ bool LoopCloser::agree(const LoopMeasurement& a, const LoopMeasurement& b) const
 }
 
 void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
-  const PoseGraph before = graph_;
-  const Eigen::Isometry3d newest_before = graph_.pose(graph_.size() - 1);
-  for (const LoopMeasurement& loop : loops)
-    graph_.addEdge(edgeOf(loop.earlier, loop.later, loop.later_in_earlier, loop.information, true));
   // Since the last loop closed, with a margin: what odometry alone has carried since (the whole
   // graph until the first loop).
   const int window = options_.optimise_window;
   const int first_free =
       last_closed_ < 0 ? 0 : std::max(0, std::min(graph_.size() - window, last_closed_ - window));
+  const PoseGraph::Checkpoint before = graph_.checkpoint(first_free);
+  const Eigen::Isometry3d newest_before = graph_.pose(graph_.size() - 1);
+  for (const LoopMeasurement& loop : loops)
+    graph_.addEdge(edgeOf(loop.earlier, loop.later, loop.later_in_earlier, loop.information, true));
   const PoseGraph::Summary summary = graph_.optimise(100, first_free);
   stats_.optimise_latency.record(summary.seconds);
   bool consistent = summary.usable;
@@ -263,7 +263,7 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   consistent = consistent && worst <= options_.max_loop_residual;
   if (!consistent) {
     // The rest of the graph disagrees with these loops: not the same place after all.
-    graph_ = before;
+    graph_.rollBack(before);
     stats_.loops_rejected.fetch_add(loops.size());
     spdlog::debug("{} loop(s) at keyframe {} rejected after optimising (residual {:.2f})",
                   loops.size(), loops.back().later, worst);

@@ -29,18 +29,19 @@ PlaceRecognition::PlaceRecognition(const CameraIntrinsics& camera, const Trackin
 
 bool PlaceRecognition::described(int id) const {
   return id >= 0 && id < static_cast<int>(entries_.size()) &&
-         entries_[static_cast<std::size_t>(id)].described;
+         entries_[static_cast<std::size_t>(id)] != nullptr;
 }
 
 void PlaceRecognition::forget(int id) {
-  if (described(id)) entries_[static_cast<std::size_t>(id)] = Entry{};
+  if (described(id)) entries_[static_cast<std::size_t>(id)].reset();
 }
 
 void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
   const auto id = static_cast<std::size_t>(keyframe.id);
   if (entries_.size() <= id) entries_.resize(id + 1);
-  Entry& entry = entries_[id];
   if (keyframe.color.empty() || keyframe.depth.empty()) return;  // nothing to recognise it by
+  entries_[id] = std::make_unique<Entry>();
+  Entry& entry = *entries_[id];
   Frame frame;
   frame.color = keyframe.color;
   frame.depth = keyframe.depth;
@@ -51,18 +52,17 @@ void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
                         static_cast<float>(tracking_.min_gradient));
   features_.prepare(frame);
   features_.describePrepared(keyframe.depth, entry.view);
-  entry.described = true;
 }
 
 std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& candidates,
                                                       Counts& counts) {
-  if (entries_.empty() || !entries_.back().described) return std::nullopt;
+  if (entries_.empty() || !entries_.back()) return std::nullopt;
   const int newest = static_cast<int>(entries_.size()) - 1;
   // Appearance first: how many distinctive ORB matches each candidate shares with the newest.
   std::vector<std::pair<int, int>> ranked;  // (matches, id)
   for (const int id : candidates) {
     if (!described(id)) continue;
-    const int matches = features_.similarity(entries_[static_cast<std::size_t>(id)].view);
+    const int matches = features_.similarity(entries_[static_cast<std::size_t>(id)]->view);
     if (matches >= options_.min_matches) ranked.emplace_back(matches, id);
   }
   std::stable_sort(ranked.begin(), ranked.end(),
@@ -72,7 +72,7 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
 
   for (const auto& [matches, id] : ranked) {
     ++counts.proposed;
-    Entry& earlier = entries_[static_cast<std::size_t>(id)];
+    Entry& earlier = *entries_[static_cast<std::size_t>(id)];
     int inliers = 0;
     const std::optional<Eigen::Isometry3d> found = features_.locate(earlier.view, &inliers);
     // Only places the camera has really been back to: two views of one wall from a metre apart
@@ -104,9 +104,11 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
 }
 
 std::size_t PlaceRecognition::memoryBytes() const {
-  std::size_t bytes = 0;
-  for (const Entry& e : entries_) {
-    bytes += e.view.descriptors.total() * e.view.descriptors.elemSize();
+  std::size_t bytes = entries_.capacity() * sizeof(entries_[0]);
+  for (const auto& entry : entries_) {
+    if (!entry) continue;
+    const Entry& e = *entry;
+    bytes += sizeof(Entry) + e.view.descriptors.total() * e.view.descriptors.elemSize();
     bytes += e.view.points.size() * sizeof(cv::Point3f);
     for (const auto& level : e.reference.levels) bytes += level.points.size() * 16;
   }

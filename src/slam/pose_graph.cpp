@@ -57,6 +57,19 @@ int PoseGraph::addNode(const Eigen::Isometry3d& estimate) {
 
 void PoseGraph::addEdge(const Edge& edge) { edges_.push_back(edge); }
 
+PoseGraph::Checkpoint PoseGraph::checkpoint(int first_free) const {
+  Checkpoint c;
+  c.edges = edges_.size();
+  c.first_free = std::clamp(first_free, 0, size());
+  c.nodes.assign(nodes_.begin() + c.first_free, nodes_.end());
+  return c;
+}
+
+void PoseGraph::rollBack(const Checkpoint& c) {
+  edges_.resize(std::min(c.edges, edges_.size()));
+  std::copy(c.nodes.begin(), c.nodes.end(), nodes_.begin() + c.first_free);
+}
+
 void PoseGraph::removeLastEdges(std::size_t count) {
   edges_.resize(edges_.size() - std::min(count, edges_.size()));
 }

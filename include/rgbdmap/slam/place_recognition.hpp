@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -54,7 +55,6 @@ class PlaceRecognition {
 
  private:
   struct Entry {
-    bool described = false;
     RelocalisationView view;
     AlignmentReference reference;
   };
@@ -66,7 +66,9 @@ class PlaceRecognition {
   Relocaliser features_;
   DenseAligner aligner_;
   ImagePyramid pyramid_;  // of the newest keyframe
-  std::vector<Entry> entries_;
+  // By keyframe id; null for a keyframe not described or forgotten. Pointers, so that growing
+  // the table never copies the places (tens of MB in a long run).
+  std::vector<std::unique_ptr<Entry>> entries_;
 };
 
 }  // namespace rgbdmap

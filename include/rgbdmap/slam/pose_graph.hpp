@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <deque>
 #include <vector>
 
 namespace rgbdmap {
@@ -19,6 +20,18 @@ class PoseGraph {
     Matrix6d sqrt_information = Matrix6d::Identity();
     bool loop = false;
   };
+  struct Node {
+    double t[3];
+    double q[4];  // x y z w (Eigen's order)
+  };
+  // Enough to undo a tentative change (edges added, then optimise(.., first_free)): the edge
+  // count and the estimates of the nodes from first_free on. A copy of the whole graph would
+  // cost as much as the graph, which grows with every keyframe.
+  struct Checkpoint {
+    std::size_t edges = 0;
+    int first_free = 0;
+    std::vector<Node> nodes;
+  };
   struct Summary {
     bool usable = false;  // the solver ended with a finite solution
     int iterations = 0;
@@ -29,6 +42,8 @@ class PoseGraph {
   int addNode(const Eigen::Isometry3d& estimate);  // returns the node's index
   void addEdge(const Edge& edge);
   void removeLastEdges(std::size_t count);  // undoes the last `count` addEdge calls
+  Checkpoint checkpoint(int first_free) const;
+  void rollBack(const Checkpoint& checkpoint);  // no node may have been added since
 
   // Optimises the nodes from `first_free` on; the older ones (and node 0 always) are held where
   // they are, and edges between two of them are left out (they cannot change anything).
@@ -36,7 +51,8 @@ class PoseGraph {
 
   int size() const { return static_cast<int>(nodes_.size()); }
   Eigen::Isometry3d pose(int node) const;
-  const std::vector<Edge>& edges() const { return edges_; }
+  // A deque: growing it never copies the edges already there (a long run has tens of thousands).
+  const std::deque<Edge>& edges() const { return edges_; }
   // |whitened error| of an edge at the current estimates.
   double whitenedError(const Edge& edge) const;
 
@@ -45,12 +61,8 @@ class PoseGraph {
   static Matrix6d sqrtInformation(const Matrix6d& information);
 
  private:
-  struct Node {
-    double t[3];
-    double q[4];  // x y z w (Eigen's order)
-  };
   std::vector<Node> nodes_;
-  std::vector<Edge> edges_;
+  std::deque<Edge> edges_;
 };
 
 }  // namespace rgbdmap
