@@ -159,6 +159,7 @@ int main(int argc, char** argv) {
   rgbdmap::addSynthCommand(app, selected);
   rgbdmap::addEvaluateCommand(app, selected);
   rgbdmap::addViewCommand(app, selected);
+  rgbdmap::addSessionCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

@@ -8,13 +8,6 @@
 namespace rgbdmap {
 namespace {
 
-// Depth is kept as K / depth (inverse depth, as the Kinect measures it, in steps of 1 / K per
-// metre): a step is depth^2 / K, at most half the noise sigma (kinectDepthSigma) from 0.4 to
-// 5 m, so the rounding adds 2% to the noise's variance while a noisy image takes a third less
-// room than in TUM's 0.2 mm steps. 0 is no depth; nearer than K / 65535 (2 cm) is dropped.
-constexpr double kInverseDepthUnits = 1300.0;
-// Colour keeps 6 bits of 8 (an error of 2 levels in 255, not to be seen) and compresses 40% better.
-constexpr int kColourBitsDropped = 2;
 constexpr double kLeverArm = 2.0;         // m
 constexpr double kUniqueViewpoint = 0.3;  // viewpoint distance (m) with no kept keyframe within
 
@@ -59,7 +52,7 @@ std::size_t KeyframeStore::mostRedundant() const {
 
 void KeyframeStore::letGo(std::size_t i) {
   const Eigen::Isometry3d gone = entries_[i].fused_at;
-  bytes_ -= entries_[i].depth_png.size() + entries_[i].colour_png.size();
+  bytes_ -= entries_[i].imageBytes();
   entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(i));
   // Those whose nearest it may have been look again (the distance is not symmetric to the last
   // bit: a margin).
@@ -83,11 +76,14 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
   half_.convertTo(half_, CV_8UC3, 1.0 / (1 << kColourBitsDropped));
   half_.setTo(cv::Scalar::all(255 >> kColourBitsDropped), half_ > (255 >> kColourBitsDropped));
   std::string error;
-  if (!encoder_.encode(units_, e.depth_png, error) || !encoder_.encode(half_, e.colour_png, error))
+  std::vector<std::uint8_t> depth_png, colour_png;
+  if (!encoder_.encode(units_, depth_png, error) || !encoder_.encode(half_, colour_png, error))
     throw std::runtime_error("a keyframe's images could not be kept for re-fusion: " + error);
-  e.depth_png.shrink_to_fit();
-  e.colour_png.shrink_to_fit();
-  bytes_ += e.depth_png.size() + e.colour_png.size();
+  depth_png.shrink_to_fit();
+  colour_png.shrink_to_fit();
+  e.depth_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(depth_png));
+  e.colour_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(colour_png));
+  bytes_ += e.imageBytes();
   e.nearest = std::numeric_limits<double>::infinity();
   for (Entry& other : entries_) {
     const double d = viewpointDistance(other.fused_at, e.fused_at);
@@ -107,9 +103,9 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
 void KeyframeStore::decode(std::size_t i, Frame& frame) {
   const Entry& e = entries_.at(i);
   std::string error;
-  if (decoder_.decode(e.depth_png.data(), e.depth_png.size(), PngDecoder::Mode::kDepth, units_,
+  if (decoder_.decode(e.depth_png->data(), e.depth_png->size(), PngDecoder::Mode::kDepth, units_,
                       error) != PngDecoder::Status::kDecoded ||
-      decoder_.decode(e.colour_png.data(), e.colour_png.size(), PngDecoder::Mode::kColor, half_,
+      decoder_.decode(e.colour_png->data(), e.colour_png->size(), PngDecoder::Mode::kColor, half_,
                       error) != PngDecoder::Status::kDecoded)
     throw std::runtime_error("a kept keyframe's images could not be decoded: " + error);
   units_.convertTo(inverse_, CV_32F);

@@ -133,7 +133,7 @@ CheckpointWriter::~CheckpointWriter() {
 
 void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
                               std::vector<TrajectoryFile> trajectories, MeshFile mesh,
-                              GridFile grid, OctomapFile octomap) {
+                              GridFile grid, OctomapFile octomap, SessionFile session) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ = std::move(cloud);
@@ -142,6 +142,7 @@ void CheckpointWriter::submit(std::shared_ptr<const MapCloud> cloud, const std::
     pending_mesh_ = std::move(mesh);
     pending_grid_ = std::move(grid);
     pending_octomap_ = std::move(octomap);
+    pending_session_ = std::move(session);
   }
   wake_.notify_all();
 }
@@ -208,6 +209,17 @@ void CheckpointWriter::writeOctomap(const MapCloud& cloud, const OctomapFile& oc
   result.octomap_seconds = secondsSince(start);
 }
 
+void CheckpointWriter::writeSessionFile(const SessionFile& session, Result& result) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string error;
+  if (writeSession(*session.session, session.path, error, &result.session_bytes)) {
+    result.session_path = session.path;
+  } else {
+    addFailure(result, "session " + error);
+  }
+  result.session_seconds = secondsSince(start);
+}
+
 void CheckpointWriter::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
@@ -223,6 +235,8 @@ void CheckpointWriter::run() {
     pending_grid_ = {};
     const OctomapFile octomap = std::move(pending_octomap_);
     pending_octomap_ = {};
+    const SessionFile session = std::move(pending_session_);
+    pending_session_ = {};
     pending_.reset();
     busy_ = true;
     lock.unlock();
@@ -247,6 +261,7 @@ void CheckpointWriter::run() {
     if (mesh.mesh) writeMesh(mesh, result);
     if (!grid.path.empty()) writeGrid(*cloud, grid, result);
     if (octomap.free_space) writeOctomap(*cloud, octomap, result);
+    if (session.session) writeSessionFile(session, result);
     result.seconds = secondsSince(start);
     (result.ok ? written_ : failed_).fetch_add(1);
     if (on_done_) on_done_(result);

@@ -31,9 +31,12 @@ PipelineOutputs outputsBeside(const std::string& map_path, const std::string& me
   outputs.trajectory_path = stem(map_path) + "_keyframes.txt";
   outputs.frame_trajectory_path = stem(map_path) + "_trajectory.txt";
   outputs.config_path = stem(map_path) + ".yaml";
+  outputs.session_path = sessionPathOf(map_path);
   outputs.mesh_path = mesh_path;
   return outputs;
 }
+
+std::string sessionPathOf(const std::string& map_path) { return stem(map_path) + ".session"; }
 
 std::string picturePathOf(const std::string& map_path) { return stem(map_path) + ".png"; }
 

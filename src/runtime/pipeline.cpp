@@ -90,6 +90,22 @@ CheckpointWriter::OctomapFile octomapFile(const PipelineOutputs& outputs, const 
   return {mapper.freeSpaceSnapshot(), outputs.octomap_path};
 }
 
+// The session saved with a checkpoint (MAP.session/, with loop closure unless
+// checkpoint.session=false): the graph and places as they are now, and the kept keyframes taken on
+// the fusion thread (their images shared, not copied).
+CheckpointWriter::SessionFile sessionFile(const PipelineOutputs& outputs, const Mapper& mapper,
+                                          const LoopCloser* loop_closer, const Config& config,
+                                          const std::string& configuration) {
+  if (outputs.session_path.empty() || !loop_closer || !config.checkpoint.session) return {};
+  auto session = std::make_shared<Session>();
+  session->created_by = std::string("rgbdmap ") + RGBDMAP_VERSION;
+  session->camera = config.camera;
+  session->configuration = configuration;
+  session->graph = loop_closer->save();
+  session->keyframes = mapper.keptKeyframes().entries();
+  return {std::move(session), outputs.session_path};
+}
+
 // Counts and logs every write of the checkpoint writer (on its thread); where up and the floor
 // came from is logged the first time and whenever it changes.
 CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh_path,
@@ -118,6 +134,10 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
       spdlog::info("mesh: {} triangles written to {} in {:.2f} s", r.mesh_triangles, mesh_path,
                    r.mesh_seconds);
     }
+    if (!r.session_path.empty())
+      spdlog::info("session: {:.1f} MB written to {} in {:.2f} s",
+                   static_cast<double>(r.session_bytes) / (1024.0 * 1024.0), r.session_path,
+                   r.session_seconds);
     if (r.ok) {
       stats.checkpoints_written.fetch_add(1);
       spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
@@ -133,10 +153,11 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
 int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
                  const std::vector<CheckpointWriter::TrajectoryFile>& trajectory_files,
                  MapPublication& publication, const PipelineOutputs& outputs, const Config& config,
-                 RunStats& stats) {
+                 CheckpointWriter::SessionFile session, RunStats& stats) {
   const std::shared_ptr<const MapCloud> final_map = mapper.snapshot();
   writer.submit(final_map, outputs.map_path, trajectory_files, meshFile(outputs, mapper, stats),
-                gridFile(outputs, mapper, config), octomapFile(outputs, mapper));
+                gridFile(outputs, mapper, config), octomapFile(outputs, mapper),
+                std::move(session));
   publication.atEnd(final_map, mapper.upEvidence());
   const CheckpointWriter::Result final_write = writer.flush();
   int exit_code = 0;
@@ -196,7 +217,12 @@ int Pipeline::run(RunControl& control) {
   spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                effectiveKeyframePolicy(config.keyframe, config.pose),
                stats_.loop_closure ? "on" : "off");
-  if (!outputs_.config_path.empty()) std::ofstream(outputs_.config_path) << config.toYaml();
+  const std::string configuration = config.toYaml();
+  if (!outputs_.config_path.empty()) std::ofstream(outputs_.config_path) << configuration;
+  if (!stats_.loop_closure && config.checkpoint.session && !outputs_.session_path.empty())
+    spdlog::info(
+        "session: not saved (it is made of loop closure's places and graph; loop "
+        "closure is off)");
 
   FrameQueue queue(static_cast<std::size_t>(config.queue.capacity),
                    live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
@@ -217,12 +243,13 @@ int Pipeline::run(RunControl& control) {
   // Checkpoints: the fusion thread takes the map snapshot and hands it to the writer, which
   // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
-    fusion.request(MapRequest::kCheckpoint,
-                   [this, &writer, &trajectory_files, &config](const Mapper& m) {
-                     writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
-                                   meshFile(outputs_, m, stats_), gridFile(outputs_, m, config),
-                                   octomapFile(outputs_, m));
-                   });
+    fusion.request(MapRequest::kCheckpoint, [this, &writer, &trajectory_files, &config,
+                                             &loop_closer, &configuration](const Mapper& m) {
+      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
+                    meshFile(outputs_, m, stats_), gridFile(outputs_, m, config),
+                    octomapFile(outputs_, m),
+                    sessionFile(outputs_, m, loop_closer.get(), config, configuration));
+    });
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
   // keyframes (and so the map) independent of timing.
@@ -248,7 +275,10 @@ int Pipeline::run(RunControl& control) {
   // keyframes), then the exit code.
   mapper.settle();
   int exit_code =
-      saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, config, stats_);
+      saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, config,
+                   sessionFile(outputs_, mapper, loop_closer.get(), config, configuration), stats_);
+  // No keyframe comes any more and the session is saved: the places can go.
+  if (loop_closer) loop_closer->forgetPlaces();
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);

@@ -25,6 +25,9 @@ Keys checkpointKeys(CheckpointOptions& o) {
       number("checkpoint.min_seconds", &o.min_seconds, 0, 1e9,
              "checkpoints by keyframe count wait this long after the previous one (each writes "
              "the whole map: every frame a keyframe, 50 keyframes would rewrite it every 2 s)"),
+      boolean("checkpoint.session", &o.session,
+              "with loop closure: save the session (places, pose graph, kept keyframes) as "
+              "MAP.session/ with every save, so that a later run can go on from it"),
   };
 }
 

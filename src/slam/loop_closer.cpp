@@ -72,8 +72,23 @@ void LoopCloser::finish() {
   spdlog::info("loop closure: {} keyframes, {} loops closed, {} rejected; place database {:.1f} MB",
                nodes_.size(), stats_.loops_accepted.load(), stats_.loops_rejected.load(),
                static_cast<double>(places_.memoryBytes()) / (1024.0 * 1024.0));
-  // No keyframe comes any more: the places are freed for the final save.
+}
+
+void LoopCloser::forgetPlaces() {
   for (std::size_t id = 0; id < nodes_.size(); ++id) places_.forget(static_cast<int>(id));
+}
+
+LoopCloser::Saved LoopCloser::save() const {
+  Saved saved;
+  saved.places = places_.places();
+  std::lock_guard<std::mutex> lock(graph_mutex_);
+  saved.keyframes.reserve(nodes_.size());
+  for (std::size_t i = 0; i < nodes_.size(); ++i)
+    saved.keyframes.push_back(
+        {nodes_[i].timestamp, nodes_[i].odometry, graph_.pose(static_cast<int>(i))});
+  saved.edges.assign(graph_.edges().begin(), graph_.edges().end());
+  saved.places.resize(std::min(saved.places.size(), nodes_.size()));
+  return saved;
 }
 
 void LoopCloser::run() {
@@ -128,6 +143,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   Node node;
   node.timestamp = keyframe.timestamp;
   node.odometry = keyframe.pose;
+  std::unique_lock<std::mutex> graph_lock(graph_mutex_);
   if (id == 0) {
     graph_.addNode(keyframe.pose);
   } else {
@@ -147,6 +163,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
                   kMetresPerRadian * angle(from);
   }
   nodes_.push_back(node);
+  graph_lock.unlock();
 
   places_.add(keyframe);
   keyframe.color.release();
@@ -250,6 +267,7 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   const int window = options_.optimise_window;
   const int first_free =
       last_closed_ < 0 ? 0 : std::max(0, std::min(graph_.size() - window, last_closed_ - window));
+  std::unique_lock<std::mutex> graph_lock(graph_mutex_);
   const PoseGraph::Checkpoint before = graph_.checkpoint(first_free);
   const Eigen::Isometry3d newest_before = graph_.pose(graph_.size() - 1);
   for (const LoopMeasurement& loop : loops)
@@ -264,11 +282,13 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   if (!consistent) {
     // The rest of the graph disagrees with these loops: not the same place after all.
     graph_.rollBack(before);
+    graph_lock.unlock();
     stats_.loops_rejected.fetch_add(loops.size());
     spdlog::debug("{} loop(s) at keyframe {} rejected after optimising (residual {:.2f})",
                   loops.size(), loops.back().later, worst);
     return;
   }
+  graph_lock.unlock();
   stats_.loops_accepted.fetch_add(loops.size());
   const Eigen::Isometry3d moved = newest_before.inverse() * graph_.pose(graph_.size() - 1);
   const LoopMeasurement& last = loops.back();

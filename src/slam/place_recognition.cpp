@@ -33,15 +33,20 @@ bool PlaceRecognition::described(int id) const {
 }
 
 void PlaceRecognition::forget(int id) {
-  if (described(id)) entries_[static_cast<std::size_t>(id)].reset();
+  if (!described(id)) return;
+  std::lock_guard<std::mutex> lock(entries_mutex_);
+  entries_[static_cast<std::size_t>(id)].reset();
 }
 
 void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
   const auto id = static_cast<std::size_t>(keyframe.id);
-  if (entries_.size() <= id) entries_.resize(id + 1);
+  if (entries_.size() <= id) {
+    std::lock_guard<std::mutex> lock(entries_mutex_);
+    entries_.resize(id + 1);
+  }
   if (keyframe.color.empty() || keyframe.depth.empty()) return;  // nothing to recognise it by
-  entries_[id] = std::make_unique<Entry>();
-  Entry& entry = *entries_[id];
+  auto place = std::make_shared<Place>();
+  Place& entry = *place;
   Frame frame;
   frame.color = keyframe.color;
   frame.depth = keyframe.depth;
@@ -52,6 +57,8 @@ void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
                         static_cast<float>(tracking_.min_gradient));
   features_.prepare(frame);
   features_.describePrepared(keyframe.depth, entry.view);
+  std::lock_guard<std::mutex> lock(entries_mutex_);
+  entries_[id] = std::move(place);
 }
 
 std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& candidates,
@@ -72,7 +79,7 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
 
   for (const auto& [matches, id] : ranked) {
     ++counts.proposed;
-    Entry& earlier = *entries_[static_cast<std::size_t>(id)];
+    Place& earlier = *entries_[static_cast<std::size_t>(id)];
     int inliers = 0;
     const std::optional<Eigen::Isometry3d> found = features_.locate(earlier.view, &inliers);
     // Only places the camera has really been back to: two views of one wall from a metre apart
@@ -107,12 +114,17 @@ std::size_t PlaceRecognition::memoryBytes() const {
   std::size_t bytes = entries_.capacity() * sizeof(entries_[0]);
   for (const auto& entry : entries_) {
     if (!entry) continue;
-    const Entry& e = *entry;
-    bytes += sizeof(Entry) + e.view.descriptors.total() * e.view.descriptors.elemSize();
+    const Place& e = *entry;
+    bytes += sizeof(Place) + e.view.descriptors.total() * e.view.descriptors.elemSize();
     bytes += e.view.points.size() * sizeof(cv::Point3f);
     for (const auto& level : e.reference.levels) bytes += level.points.size() * 16;
   }
   return bytes;
+}
+
+std::vector<std::shared_ptr<const PlaceRecognition::Place>> PlaceRecognition::places() const {
+  std::lock_guard<std::mutex> lock(entries_mutex_);
+  return {entries_.begin(), entries_.end()};
 }
 
 }  // namespace rgbdmap

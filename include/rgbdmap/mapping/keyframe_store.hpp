@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,8 +36,13 @@ class KeyframeStore {
     std::int64_t anchor = -1;
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();      // as tracked (odometry)
     Eigen::Isometry3d fused_at = Eigen::Isometry3d::Identity();  // in the map, corrected
-    std::vector<std::uint8_t> depth_png, colour_png;
+    // Shared and never changed once encoded: a session saved with a checkpoint holds them
+    // without copying (tens of MB).
+    std::shared_ptr<const std::vector<std::uint8_t>> depth_png, colour_png;
     double nearest = 0.0;  // viewpoint distance to the nearest other kept keyframe
+    std::size_t imageBytes() const {
+      return (depth_png ? depth_png->size() : 0) + (colour_png ? colour_png->size() : 0);
+    }
   };
 
   explicit KeyframeStore(std::size_t budget_bytes) : budget_bytes_(budget_bytes) {}
@@ -50,6 +56,17 @@ class KeyframeStore {
   // The stored images back into `frame` (depth in metres, colour BGR), with the entry's
   // timestamp, index, anchor and odometry pose.
   void decode(std::size_t i, Frame& frame);
+  // The kept keyframes as they are now (the images shared, not copied).
+  std::vector<Entry> entries() const { return entries_; }
+  // How the images are stored (a session records them). Depth: a 16-bit PNG of K / depth
+  // (inverse depth, as the Kinect measures it, in steps of 1 / K per metre): a step is
+  // depth^2 / K, at most half the noise sigma (kinectDepthSigma) from 0.4 to 5 m, so the
+  // rounding adds 2% to the noise's variance while a noisy image takes a third less room than in
+  // TUM's 0.2 mm steps. 0 is no depth; nearer than K / 65535 (2 cm) is dropped. Colour: a PNG
+  // at half size, BGR, keeping 6 bits of 8 (an error of 2 levels in 255, not to be seen; it
+  // compresses 40% better).
+  static constexpr double kInverseDepthUnits = 1300.0;
+  static constexpr int kColourBitsDropped = 2;
   std::size_t memoryBytes() const { return bytes_ + entries_.capacity() * sizeof(Entry); }
 
  private:

@@ -14,6 +14,7 @@
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/occupancy_grid.hpp"
 #include "rgbdmap/mapping/triangle_mesh.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/trajectory_stream.hpp"
 
 namespace rgbdmap {
@@ -53,6 +54,10 @@ class CheckpointWriter {
     std::string octomap_path;
     std::size_t octomap_occupied = 0, octomap_free = 0;
     double octomap_seconds = 0.0;
+    // The session written with the map (none: empty path): its size and how long it took.
+    std::string session_path;
+    std::uint64_t session_bytes = 0;
+    double session_seconds = 0.0;
   };
   using Callback = std::function<void(const Result&)>;
   // A trajectory written beside the map in the same checkpoint: what it recorded since the last.
@@ -77,12 +82,19 @@ class CheckpointWriter {
     std::string path;
   };
 
+  // The session saved beside the map (session_file.hpp): the places and graph, the kept
+  // keyframes' images (shared with the mapper, not copied), the camera and configuration.
+  struct SessionFile {
+    std::shared_ptr<const Session> session;  // null: no session
+    std::string path;
+  };
+
   explicit CheckpointWriter(Callback on_done = nullptr);
   ~CheckpointWriter();  // finishes a pending write, then stops
 
   void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
               std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {}, GridFile grid = {},
-              OctomapFile octomap = {});
+              OctomapFile octomap = {}, SessionFile session = {});
   // Waits until nothing is pending or being written. Returns the last result.
   Result flush();
   std::uint64_t written() const { return written_.load(); }
@@ -93,6 +105,7 @@ class CheckpointWriter {
   void writeMesh(const MeshFile& mesh, Result& result);
   void writeGrid(const MapCloud& cloud, const GridFile& grid, Result& result);
   void writeOctomap(const MapCloud& cloud, const OctomapFile& octomap, Result& result);
+  void writeSessionFile(const SessionFile& session, Result& result);
 
   Callback on_done_;
   std::mutex mutex_;
@@ -103,6 +116,7 @@ class CheckpointWriter {
   MeshFile pending_mesh_;
   GridFile pending_grid_;
   OctomapFile pending_octomap_;
+  SessionFile pending_session_;
   bool busy_ = false;
   bool stop_ = false;
   Result last_;

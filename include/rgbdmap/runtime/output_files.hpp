@@ -22,8 +22,10 @@ std::string temporaryFileOf(const std::string& path);
 std::string spoolFileOf(const std::string& trajectory_path);
 
 // The files of a run whose map is `map_path`: the map, and beside it MAP_keyframes.txt,
-// MAP_trajectory.txt and MAP.yaml (docs/usage.md), with `mesh_path` ("" = no mesh).
+// MAP_trajectory.txt, MAP.yaml and MAP.session (docs/usage.md), with `mesh_path` ("" = no mesh).
 PipelineOutputs outputsBeside(const std::string& map_path, const std::string& mesh_path = "");
+// MAP.session, the session folder saved beside map MAP.pcd (session_file.hpp).
+std::string sessionPathOf(const std::string& map_path);
 // MAP.png, the picture of the map the CLI renders after a run.
 std::string picturePathOf(const std::string& map_path);
 // Every temporary file the writers of `outputs` may have on disk while the run goes on.

@@ -25,6 +25,7 @@ struct PipelineOutputs {
   std::string mesh_path;     // triangle mesh (binary PLY) written with every map save ("" = none)
   std::string grid_path;     // occupancy grid (PGM + YAML) written with every map save ("" = none)
   std::string octomap_path;  // binary OctoMap written with every map save ("" = none)
+  std::string session_path;  // MAP.session/ written with every map save ("" = none)
   bool status_line = true;
   MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
 };

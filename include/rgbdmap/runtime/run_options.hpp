@@ -19,6 +19,7 @@ struct CheckpointOptions {
   int every_keyframes = 50;   // 0 = off
   double every_seconds = 60;  // 0 = off
   double min_seconds = 10;    // between checkpoints by keyframe count
+  bool session = true;        // MAP.session/ with every save (with loop closure)
 };
 
 Keys replayKeys(ReplayOptions& o);

@@ -31,9 +31,26 @@ class LoopCloser : public KeyframeSink {
              PoseCorrections& corrections, RunStats& stats, bool lossless);
   ~LoopCloser() override;
 
+  // What a saved session keeps of loop closure: every keyframe with its odometry and optimised
+  // pose, the graph's edges, and the places (by keyframe id, null where none; shared).
+  struct Saved {
+    struct Keyframe {
+      double timestamp = 0.0;
+      Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    };
+    std::vector<Keyframe> keyframes;
+    std::vector<PoseGraph::Edge> edges;
+    std::vector<std::shared_ptr<const PlaceRecognition::Place>> places;
+  };
+
   void addKeyframe(TrackedKeyframe keyframe) override;
   // Processes every queued keyframe, then stops the thread. The corrections are final after it.
   void finish();
+  // The graph and places as they are now. Any thread; waits at most for one optimisation.
+  Saved save() const;
+  // Lets the places go (after finish() and the last save: no keyframe comes any more).
+  void forgetPlaces();
 
  private:
   struct Node {
@@ -65,8 +82,10 @@ class LoopCloser : public KeyframeSink {
   RunStats& stats_;
   bool lossless_;
   PlaceRecognition places_;
+  // Changed on the loop thread only, under `graph_mutex_` so that save() sees them whole.
   PoseGraph graph_;
   std::vector<Node> nodes_;
+  mutable std::mutex graph_mutex_;
   std::deque<Pending> pending_;
   int last_closed_ = -1;  // the newest keyframe of the last loop closed
 

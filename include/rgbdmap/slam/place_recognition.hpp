@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -32,6 +33,12 @@ struct LoopMeasurement {
 // place.
 class PlaceRecognition {
  public:
+  // What a keyframe is recognised by: its ORB features with their 3-D points, and its dense
+  // alignment reference. Never changed once added (a saved session shares them).
+  struct Place {
+    RelocalisationView view;
+    AlignmentReference reference;
+  };
   struct Counts {
     int proposed = 0;  // looked alike (enough ORB matches)
     int verified = 0;  // passed the geometric checks
@@ -52,13 +59,11 @@ class PlaceRecognition {
   // find it).
   void forget(int id);
   std::size_t memoryBytes() const;
+  // The places as they are now, by keyframe id (null where none): shared, not copied. Safe to
+  // call from any thread.
+  std::vector<std::shared_ptr<const Place>> places() const;
 
  private:
-  struct Entry {
-    RelocalisationView view;
-    AlignmentReference reference;
-  };
-
   CameraIntrinsics camera_;
   TrackingOptions tracking_;
   LoopOptions options_;
@@ -68,7 +73,9 @@ class PlaceRecognition {
   ImagePyramid pyramid_;  // of the newest keyframe
   // By keyframe id; null for a keyframe not described or forgotten. Pointers, so that growing
   // the table never copies the places (tens of MB in a long run).
-  std::vector<std::unique_ptr<Entry>> entries_;
+  // Written on the caller's (loop) thread only, under `entries_mutex_` for places().
+  std::vector<std::shared_ptr<Place>> entries_;
+  mutable std::mutex entries_mutex_;
 };
 
 }  // namespace rgbdmap

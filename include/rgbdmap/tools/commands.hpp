@@ -16,5 +16,6 @@ void addRecordCommand(CLI::App& app, Command& selected);     // tools/record.cpp
 void addSynthCommand(CLI::App& app, Command& selected);      // tools/synth.cpp
 void addEvaluateCommand(CLI::App& app, Command& selected);   // tools/evaluate.cpp
 void addViewCommand(CLI::App& app, Command& selected);       // tools/view.cpp
+void addSessionCommand(CLI::App& app, Command& selected);    // tools/session.cpp
 
 }  // namespace rgbdmap

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/mapping/keyframe_store.hpp"
+#include "rgbdmap/slam/loop_closer.hpp"
+
+namespace rgbdmap {
+
+// A mapping session, saved beside its map (MAP.session/, docs/sessions.md) with every checkpoint
+// and at the end: what a later run needs to go on from it. The places and the pose graph come
+// from loop closure, the map as the kept keyframes' compressed images (the map is fused from
+// them again at their poses), with the camera and the effective configuration.
+struct Session {
+  static constexpr std::uint32_t kFormatVersion = 1;
+
+  std::string created_by;  // "rgbdmap <version>"
+  CameraIntrinsics camera;
+  std::string configuration;  // the effective configuration, YAML
+  LoopCloser::Saved graph;
+  std::vector<KeyframeStore::Entry> keyframes;  // the kept ones, images shared
+};
+
+// What a session folder holds, read from it (`rgbdmap session`, the log).
+struct SessionSummary {
+  std::size_t keyframes = 0, edges = 0, loop_edges = 0, places = 0, kept_keyframes = 0;
+  std::uint64_t bytes = 0;  // all files
+};
+
+// Writes `session` as folder `path`: the files go into a new folder beside it, which then takes
+// the old one's place in one step (so `path` is always a whole session, the old or the new).
+// Returns false with `error` naming the path and the system error; the old session stays.
+bool writeSession(const Session& session, const std::string& path, std::string& error,
+                  std::uint64_t* bytes = nullptr);
+
+// Reads a session folder back. Throws InputError naming the file that is missing, from another
+// format version, truncated or corrupt.
+Session readSession(const std::string& path);
+SessionSummary summarise(const Session& session, const std::string& path);
+
+}  // namespace rgbdmap

@@ -1,0 +1,337 @@
+#include "rgbdmap/runtime/session_file.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "rgbdmap/base/binary_record.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The files of a session folder (docs/sessions.md describes each).
+constexpr const char* kSummaryFile = "session.yaml";
+constexpr const char* kConfigFile = "config.yaml";
+constexpr const char* kGraphFile = "graph.bin";
+constexpr const char* kPlacesFile = "places.bin";
+constexpr const char* kKeyframesFile = "keyframes.bin";
+constexpr char kGraphKind[5] = "GRPH";
+constexpr char kPlacesKind[5] = "PLCS";
+constexpr char kKeyframesKind[5] = "KFRM";
+// A place's descriptors are ORB's: 32 bytes a row.
+constexpr int kDescriptorBytes = 32;
+
+void putPose(BinaryWriter& out, const Eigen::Isometry3d& pose) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) out.put<double>(pose.matrix()(r, c));
+}
+
+Eigen::Isometry3d getPose(BinaryReader& in) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = in.get<double>();
+  // Bit for bit as written (a session read and written again is the same files); a rotation that
+  // is not one is damage the checksum missed.
+  if (!pose.matrix().allFinite() || !(pose.linear() * pose.linear().transpose()).isIdentity(1e-6))
+    in.fail("corrupt (a pose that is not a rigid motion)");
+  return pose;
+}
+
+std::string graphPayload(const Session& s) {
+  BinaryWriter out;
+  const CameraIntrinsics& c = s.camera;
+  out.put<std::int32_t>(c.width);
+  out.put<std::int32_t>(c.height);
+  for (const double v : {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3}) out.put(v);
+  out.put<std::uint64_t>(s.graph.keyframes.size());
+  for (const LoopCloser::Saved::Keyframe& k : s.graph.keyframes) {
+    out.put(k.timestamp);
+    putPose(out, k.odometry);
+    putPose(out, k.pose);
+  }
+  out.put<std::uint64_t>(s.graph.edges.size());
+  for (const PoseGraph::Edge& e : s.graph.edges) {
+    out.put<std::int32_t>(e.from);
+    out.put<std::int32_t>(e.to);
+    out.put<std::uint8_t>(e.loop ? 1 : 0);
+    putPose(out, e.measurement);
+    for (int i = 0; i < 36; ++i) out.put<double>(e.sqrt_information.data()[i]);
+  }
+  return out.data();
+}
+
+void readGraph(BinaryReader in, Session& s) {
+  CameraIntrinsics& c = s.camera;
+  c.width = in.get<std::int32_t>();
+  c.height = in.get<std::int32_t>();
+  for (double* v : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2, &c.p1, &c.p2, &c.k3})
+    *v = in.get<double>();
+  if (c.width <= 0 || c.height <= 0 || !(c.fx > 0) || !(c.fy > 0))
+    in.fail("corrupt (camera " + std::to_string(c.width) + "x" + std::to_string(c.height) + ")");
+  const std::size_t keyframes = in.count(8 + 2 * 12 * 8);
+  s.graph.keyframes.resize(keyframes);
+  for (LoopCloser::Saved::Keyframe& k : s.graph.keyframes) {
+    k.timestamp = in.get<double>();
+    k.odometry = getPose(in);
+    k.pose = getPose(in);
+  }
+  const std::size_t edges = in.count(9 + 48 * 8);
+  s.graph.edges.resize(edges);
+  for (PoseGraph::Edge& e : s.graph.edges) {
+    e.from = in.get<std::int32_t>();
+    e.to = in.get<std::int32_t>();
+    e.loop = in.get<std::uint8_t>() != 0;
+    e.measurement = getPose(in);
+    for (int i = 0; i < 36; ++i) e.sqrt_information.data()[i] = in.get<double>();
+    if (e.from < 0 || e.to < 0 || static_cast<std::size_t>(e.from) >= keyframes ||
+        static_cast<std::size_t>(e.to) >= keyframes)
+      in.fail("corrupt (an edge " + std::to_string(e.from) + " -> " + std::to_string(e.to) +
+              " between keyframes that are not there)");
+  }
+  if (!in.atEnd()) in.fail("corrupt (bytes after the edges)");
+}
+
+std::string placesPayload(const Session& s) {
+  BinaryWriter out;
+  out.put<std::uint64_t>(s.graph.places.size());
+  for (const auto& place : s.graph.places) {
+    out.put<std::uint8_t>(place ? 1 : 0);
+    if (!place) continue;
+    const RelocalisationView& view = place->view;
+    out.put<std::uint64_t>(view.points.size());
+    for (const cv::Point3f& p : view.points) out.put(p);
+    const cv::Mat descriptors =
+        view.descriptors.isContinuous() ? view.descriptors : view.descriptors.clone();
+    out.put<std::uint64_t>(static_cast<std::uint64_t>(descriptors.rows));
+    if (descriptors.rows > 0) out.putBytes(descriptors.data, descriptors.total());
+    const AlignmentReference& reference = place->reference;
+    out.put<std::int32_t>(reference.valid_pixels);
+    out.put<std::uint64_t>(reference.levels.size());
+    for (const AlignmentReference::Level& level : reference.levels) {
+      out.put(level.camera);
+      out.put<std::uint64_t>(level.points.size());
+      out.putBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
+    }
+  }
+  return out.data();
+}
+
+void readPlaces(BinaryReader in, Session& s) {
+  const std::size_t count = in.count(1);
+  if (count != s.graph.keyframes.size())
+    in.fail("corrupt (" + std::to_string(count) + " places for " +
+            std::to_string(s.graph.keyframes.size()) + " keyframes)");
+  s.graph.places.resize(count);
+  for (auto& slot : s.graph.places) {
+    if (in.get<std::uint8_t>() == 0) continue;
+    auto place = std::make_shared<PlaceRecognition::Place>();
+    RelocalisationView& view = place->view;
+    view.points.resize(in.count(sizeof(cv::Point3f)));
+    for (cv::Point3f& p : view.points) p = in.get<cv::Point3f>();
+    const std::size_t rows = in.count(kDescriptorBytes);
+    if (rows != view.points.size())
+      in.fail("corrupt (" + std::to_string(rows) + " descriptors for " +
+              std::to_string(view.points.size()) + " points)");
+    view.descriptors.create(static_cast<int>(rows), kDescriptorBytes, CV_8UC1);
+    if (rows > 0) in.getBytes(view.descriptors.data, rows * kDescriptorBytes);
+    view.described = true;
+    AlignmentReference& reference = place->reference;
+    reference.valid_pixels = in.get<std::int32_t>();
+    reference.levels.resize(in.count(sizeof(LevelCamera)));
+    for (AlignmentReference::Level& level : reference.levels) {
+      level.camera = in.get<LevelCamera>();
+      level.points.resize(in.count(sizeof(Eigen::Vector4f)));
+      in.getBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
+    }
+    slot = std::move(place);
+  }
+  if (!in.atEnd()) in.fail("corrupt (bytes after the places)");
+}
+
+void putBlob(BinaryWriter& out, const std::shared_ptr<const std::vector<std::uint8_t>>& blob) {
+  const std::size_t size = blob ? blob->size() : 0;
+  out.put<std::uint64_t>(size);
+  if (size > 0) out.putBytes(blob->data(), size);
+}
+
+std::shared_ptr<const std::vector<std::uint8_t>> getBlob(BinaryReader& in) {
+  std::vector<std::uint8_t> blob(in.count(1));
+  in.getBytes(blob.data(), blob.size());
+  return std::make_shared<const std::vector<std::uint8_t>>(std::move(blob));
+}
+
+std::string keyframesPayload(const Session& s) {
+  BinaryWriter out;
+  out.put<double>(KeyframeStore::kInverseDepthUnits);
+  out.put<std::int32_t>(KeyframeStore::kColourBitsDropped);
+  out.put<std::uint64_t>(s.keyframes.size());
+  for (const KeyframeStore::Entry& e : s.keyframes) {
+    out.put(e.timestamp);
+    out.put<std::uint64_t>(e.index);
+    out.put<std::int64_t>(e.anchor);
+    putPose(out, e.pose);
+    putPose(out, e.fused_at);
+    putBlob(out, e.depth_png);
+    putBlob(out, e.colour_png);
+  }
+  return out.data();
+}
+
+void readKeyframes(BinaryReader in, Session& s) {
+  if (in.get<double>() != KeyframeStore::kInverseDepthUnits ||
+      in.get<std::int32_t>() != KeyframeStore::kColourBitsDropped)
+    in.fail("images stored with another depth or colour encoding than this rgbdmap's");
+  s.keyframes.resize(in.count(8 + 8 + 8 + 2 * 12 * 8 + 16));
+  for (KeyframeStore::Entry& e : s.keyframes) {
+    e.timestamp = in.get<double>();
+    e.index = in.get<std::uint64_t>();
+    e.anchor = in.get<std::int64_t>();
+    e.pose = getPose(in);
+    e.fused_at = getPose(in);
+    e.depth_png = getBlob(in);
+    e.colour_png = getBlob(in);
+    if (e.anchor >= static_cast<std::int64_t>(s.graph.keyframes.size()))
+      in.fail("corrupt (a kept keyframe anchored to keyframe " + std::to_string(e.anchor) + " of " +
+              std::to_string(s.graph.keyframes.size()) + ")");
+  }
+  if (!in.atEnd()) in.fail("corrupt (bytes after the keyframes)");
+}
+
+std::string summaryText(const Session& s, const SessionSummary& summary) {
+  std::ostringstream out;
+  out << "# rgbdmap session (docs/sessions.md): what a later run needs to go on from this map\n"
+      << "format: rgbdmap-session\n"
+      << "version: " << Session::kFormatVersion << "\n"
+      << "created_by: " << s.created_by << "\n"
+      << "keyframes: " << summary.keyframes << "\n"
+      << "edges: " << summary.edges << "  # " << summary.loop_edges << " of them loops\n"
+      << "places: " << summary.places << "\n"
+      << "kept_keyframes: " << summary.kept_keyframes << "\n"
+      << "camera: {width: " << s.camera.width << ", height: " << s.camera.height
+      << ", fx: " << s.camera.fx << ", fy: " << s.camera.fy << ", cx: " << s.camera.cx
+      << ", cy: " << s.camera.cy << "}\n";
+  return out.str();
+}
+
+bool writeText(const std::string& path, const std::string& text, std::string& error) {
+  return writeFileAtomically(
+      path, [&](int fd) { return writeAll(fd, text.data(), text.size()); }, error);
+}
+
+void syncFolder(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+// "version: N" of session.yaml, checked before anything else is read.
+void checkVersion(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
+  bool is_session = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("format: rgbdmap-session", 0) == 0) is_session = true;
+    if (line.rfind("version: ", 0) != 0) continue;
+    const std::string version = line.substr(9);
+    if (!is_session) break;
+    if (version != std::to_string(Session::kFormatVersion))
+      throw InputError(path + ": session format version " + version +
+                       ", this rgbdmap reads version " + std::to_string(Session::kFormatVersion));
+    return;
+  }
+  throw InputError(path + ": not an rgbdmap session (no 'format: rgbdmap-session' and version)");
+}
+
+}  // namespace
+
+SessionSummary summarise(const Session& s, const std::string& path) {
+  SessionSummary summary;
+  summary.keyframes = s.graph.keyframes.size();
+  summary.edges = s.graph.edges.size();
+  for (const PoseGraph::Edge& e : s.graph.edges) summary.loop_edges += e.loop ? 1 : 0;
+  for (const auto& place : s.graph.places) summary.places += place ? 1 : 0;
+  summary.kept_keyframes = s.keyframes.size();
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(path, ec))
+    if (entry.is_regular_file(ec)) summary.bytes += entry.file_size(ec);
+  return summary;
+}
+
+bool writeSession(const Session& session, const std::string& path, std::string& error,
+                  std::uint64_t* bytes) {
+  const std::string fresh = temporaryFileOf(path);
+  std::error_code ec;
+  fs::remove_all(fresh, ec);
+  fs::create_directories(fresh, ec);
+  if (ec) {
+    error = path + ": cannot create " + fresh + ": " + ec.message();
+    return false;
+  }
+  const auto in = [&fresh](const char* name) { return fresh + "/" + name; };
+  SessionSummary summary = summarise(session, fresh);
+  const bool written =
+      writeText(in(kGraphFile),
+                sealRecord(kGraphKind, Session::kFormatVersion, graphPayload(session)), error) &&
+      writeText(in(kPlacesFile),
+                sealRecord(kPlacesKind, Session::kFormatVersion, placesPayload(session)), error) &&
+      writeText(in(kKeyframesFile),
+                sealRecord(kKeyframesKind, Session::kFormatVersion, keyframesPayload(session)),
+                error) &&
+      writeText(in(kConfigFile), session.configuration, error) &&
+      writeText(in(kSummaryFile), summaryText(session, summary), error);
+  if (!written) {
+    fs::remove_all(fresh, ec);
+    return false;
+  }
+  syncFolder(fresh);
+  // The new folder takes the old one's place in one step (the old one, now at `fresh`, goes).
+  const bool exists = fs::exists(path, ec);
+  const int swapped =
+      exists ? ::renameat2(AT_FDCWD, fresh.c_str(), AT_FDCWD, path.c_str(), RENAME_EXCHANGE)
+             : std::rename(fresh.c_str(), path.c_str());
+  if (swapped != 0) {
+    error = path + ": cannot move " + fresh + " into place: " + std::strerror(errno);
+    fs::remove_all(fresh, ec);
+    return false;
+  }
+  if (exists) fs::remove_all(fresh, ec);
+  syncFolder(fs::absolute(path).parent_path().string());
+  if (bytes) *bytes = summarise(session, path).bytes;
+  return true;
+}
+
+Session readSession(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec))
+    throw InputError(path +
+                     ": no session folder there (sessions are written beside the map as "
+                     "MAP.session)");
+  const auto in = [&path](const char* name) { return path + "/" + name; };
+  checkVersion(in(kSummaryFile));
+  Session session;
+  {
+    std::ifstream config(in(kConfigFile));
+    if (!config) throw InputError(in(kConfigFile) + ": cannot open (" + std::strerror(errno) + ")");
+    std::ostringstream text;
+    text << config.rdbuf();
+    session.configuration = text.str();
+  }
+  readGraph(openRecord(in(kGraphFile), kGraphKind, Session::kFormatVersion), session);
+  readPlaces(openRecord(in(kPlacesFile), kPlacesKind, Session::kFormatVersion), session);
+  readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
+  return session;
+}
+
+}  // namespace rgbdmap

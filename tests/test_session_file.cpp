@@ -1,0 +1,197 @@
+// The session saved beside the map (MAP.session/): what it holds is what the run had, it reads
+// back whole, and a truncated, corrupt or other-version session is refused naming the file.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+
+// Maps fr1/rpy's 100 frames with odometry and loop closure (the default for a camera), once.
+const std::string& mappedRun() {
+  static const std::string dir = [] {
+    // Its own folder: each test's freshDir() is emptied when the test asks for it.
+    const std::string d = std::string(RGBDMAP_TEST_TMP) + "/SessionFile.run";
+    fs::remove_all(d);
+    fs::create_directories(d);
+    std::string output;
+    const int code =
+        test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + d +
+                      "/map.pcd --no-render --viewer none --set " + "pose.source=odometry",
+                  &output);
+    EXPECT_EQ(code, 0) << output;
+    std::ofstream(d + "/log.txt") << output;
+    return d;
+  }();
+  return dir;
+}
+
+std::size_t lines(const std::string& path) {
+  std::ifstream in(path);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] != '#') ++n;
+  return n;
+}
+
+// A copy of the run's session in `dir` (the test's freshDir()).
+std::string copySession(const std::string& dir, const std::string& name) {
+  const std::string copy = dir + "/" + name;
+  fs::copy(mappedRun() + "/map.session", copy);
+  return copy;
+}
+
+// The message readSession refuses `path` with ("" when it reads).
+std::string refusal(const std::string& path) {
+  try {
+    readSession(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SessionFile, HoldsTheRunsGraphPlacesAndKeyframeImages) {
+  const std::string dir = mappedRun();
+  ASSERT_TRUE(fs::is_directory(dir + "/map.session")) << test::readFile(dir + "/log.txt");
+  EXPECT_NE(test::readFile(dir + "/log.txt").find("session: "), std::string::npos);
+  const Session session = readSession(dir + "/map.session");
+  // Every fused keyframe kept (100 frames are within the budget), as the keyframe file says.
+  EXPECT_EQ(session.keyframes.size(), lines(dir + "/map_keyframes.txt"));
+  ASSERT_GE(session.graph.keyframes.size(), 5u);
+  EXPECT_EQ(session.graph.edges.size(), session.graph.keyframes.size() - 1);  // no loop here
+  EXPECT_EQ(session.graph.places.size(), session.graph.keyframes.size());
+  ASSERT_TRUE(session.graph.places.front());
+  EXPECT_GT(session.graph.places.front()->view.points.size(), 100u);
+  EXPECT_EQ(session.graph.places.front()->view.descriptors.rows,
+            static_cast<int>(session.graph.places.front()->view.points.size()));
+  EXPECT_FALSE(session.graph.places.front()->reference.levels.empty());
+  EXPECT_DOUBLE_EQ(session.camera.fx, 517.3);
+  EXPECT_DOUBLE_EQ(session.camera.cy, 255.3);
+  EXPECT_NE(session.configuration.find("pose:"), std::string::npos);
+  for (std::size_t i = 1; i < session.graph.keyframes.size(); ++i)
+    EXPECT_GT(session.graph.keyframes[i].timestamp, session.graph.keyframes[i - 1].timestamp);
+
+  // A kept keyframe's depth is the sensor's, to the inverse-depth step.
+  const TumSequence sequence(test::tumDir(kRpy));
+  const KeyframeStore::Entry& kept = session.keyframes[session.keyframes.size() / 2];
+  std::size_t j = 0;
+  while (j < sequence.size() && std::abs(sequence[j].rgb_time - kept.timestamp) > 1e-6) ++j;
+  ASSERT_LT(j, sequence.size()) << "no frame at " << kept.timestamp;
+  const cv::Mat units = cv::imdecode(*kept.depth_png, cv::IMREAD_UNCHANGED);
+  const cv::Mat truth = cv::imread(sequence[j].depth_path, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(units.type(), CV_16UC1);
+  ASSERT_EQ(units.size(), truth.size());
+  std::size_t compared = 0, within = 0;
+  for (int y = 0; y < truth.rows; y += 4)
+    for (int x = 0; x < truth.cols; x += 4) {
+      const double z = truth.at<std::uint16_t>(y, x) / 5000.0;
+      const int u = units.at<std::uint16_t>(y, x);
+      if (z < 0.5 || z > 4.0 || u == 0) continue;
+      ++compared;
+      const double kept_z = KeyframeStore::kInverseDepthUnits / u;
+      within += std::abs(kept_z - z) <= z * z / KeyframeStore::kInverseDepthUnits + 1e-3;
+    }
+  ASSERT_GT(compared, 5000u);
+  EXPECT_GE(static_cast<double>(within), 0.99 * compared);
+}
+
+TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
+  const std::string original = mappedRun() + "/map.session";
+  const std::string again = test::freshDir() + "/again.session";
+  std::string error;
+  ASSERT_TRUE(writeSession(readSession(original), again, error)) << error;
+  for (const char* name : {"graph.bin", "places.bin", "keyframes.bin", "config.yaml"})
+    EXPECT_EQ(test::readFile(original + "/" + name), test::readFile(again + "/" + name)) << name;
+  // Written over: the new folder takes the old one's place, nothing is left beside it.
+  ASSERT_TRUE(writeSession(readSession(original), again, error)) << error;
+  std::size_t beside = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(again).parent_path()))
+    beside += entry.path() != fs::path(again);
+  EXPECT_EQ(beside, 0u);
+  EXPECT_EQ(refusal(again), "");
+}
+
+TEST(SessionFile, TruncatedCorruptOrOtherVersionIsRefusedNamingTheFile) {
+  const std::string dir = test::freshDir();
+  {
+    const std::string s = copySession(dir, "truncated.session");
+    fs::resize_file(s + "/keyframes.bin", fs::file_size(s + "/keyframes.bin") / 2);
+    const std::string message = refusal(s);
+    EXPECT_NE(message.find(s + "/keyframes.bin: truncated"), std::string::npos) << message;
+  }
+  {
+    const std::string s = copySession(dir, "corrupt.session");
+    std::fstream file(s + "/places.bin", std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(static_cast<std::streamoff>(fs::file_size(s + "/places.bin") / 2));
+    file.put('\x5a');
+    file.close();
+    const std::string message = refusal(s);
+    EXPECT_NE(message.find(s + "/places.bin: corrupt"), std::string::npos) << message;
+  }
+  {
+    const std::string s = copySession(dir, "version.session");
+    std::string summary = test::readFile(s + "/session.yaml");
+    summary.replace(summary.find("version: 1"), 10, "version: 9");
+    std::ofstream(s + "/session.yaml") << summary;
+    const std::string message = refusal(s);
+    EXPECT_NE(message.find(s + "/session.yaml: session format version 9"), std::string::npos)
+        << message;
+  }
+  {
+    const std::string s = copySession(dir, "missing.session");
+    fs::remove(s + "/graph.bin");
+    EXPECT_NE(refusal(s).find(s + "/graph.bin: cannot open"), std::string::npos) << refusal(s);
+  }
+  {
+    // A file of another kind in a session's place.
+    const std::string s = copySession(dir, "swapped.session");
+    fs::copy_file(s + "/places.bin", s + "/graph.bin", fs::copy_options::overwrite_existing);
+    EXPECT_NE(refusal(s).find(s + "/graph.bin: holds 'PLCS', expected 'GRPH'"), std::string::npos)
+        << refusal(s);
+  }
+  // The command line: one message naming the file, exit 2.
+  const std::string s = copySession(dir, "cli.session");
+  fs::resize_file(s + "/graph.bin", 40);
+  std::string output;
+  EXPECT_EQ(test::run(test::binary() + " session " + s, &output), 2);
+  EXPECT_NE(output.find(s + "/graph.bin: truncated"), std::string::npos) << output;
+  EXPECT_EQ(test::run(test::binary() + " session " + mappedRun() + "/map.session", &output), 0);
+  EXPECT_NE(output.find("rgbdmap session, format version 1"), std::string::npos) << output;
+}
+
+TEST(SessionFile, NotSavedWhenTurnedOffOrWithoutLoopClosure) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+                          "/off.pcd --no-render --viewer none --set pose.source=odometry " +
+                          "--set checkpoint.session=false",
+                      &output),
+            0)
+      << output;
+  EXPECT_FALSE(fs::exists(dir + "/off.session"));
+  // Ground-truth poses: no loop closure, nothing a session is made of; the log says so.
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+                          "/truth.pcd --no-render --viewer none",
+                      &output),
+            0)
+      << output;
+  EXPECT_FALSE(fs::exists(dir + "/truth.session"));
+  EXPECT_NE(output.find("session: not saved"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rgbdmap

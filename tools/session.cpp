@@ -1,0 +1,42 @@
+// `rgbdmap session MAP.session`: reads a saved session through, says what it holds, and refuses
+// one that is from another format version, truncated or corrupt (exit 2, naming the file).
+#include <cstdio>
+
+#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/tools/commands.hpp"
+
+namespace rgbdmap {
+
+void addSessionCommand(CLI::App& app, Command& selected) {
+  auto* cmd = app.add_subcommand(
+      "session", "check a saved session (MAP.session) and say what it holds (docs/sessions.md)");
+  auto path = std::make_shared<std::string>();
+  cmd->add_option("session", *path, "the session folder, MAP.session beside MAP.pcd")->required();
+  cmd->callback([path, &selected] {
+    selected = [path] {
+      const Session session = readSession(*path);
+      const SessionSummary s = summarise(session, *path);
+      std::size_t place_points = 0;
+      for (const auto& place : session.graph.places)
+        if (place) place_points += place->view.points.size();
+      double first = 0, last = 0;
+      if (!session.graph.keyframes.empty()) {
+        first = session.graph.keyframes.front().timestamp;
+        last = session.graph.keyframes.back().timestamp;
+      }
+      std::printf(
+          "%s: rgbdmap session, format version %u, %.1f MB\n"
+          "  pose graph: %zu keyframes (%.1f s, stamps %.6f to %.6f), %zu edges (%zu loops)\n"
+          "  places: %zu (%zu ORB features with 3-D points, and dense references)\n"
+          "  map: %zu kept keyframes (compressed images, fused again at their poses)\n"
+          "  camera %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f\n",
+          path->c_str(), Session::kFormatVersion, static_cast<double>(s.bytes) / (1024.0 * 1024.0),
+          s.keyframes, last - first, first, last, s.edges, s.loop_edges, s.places, place_points,
+          s.kept_keyframes, session.camera.width, session.camera.height, session.camera.fx,
+          session.camera.fy, session.camera.cx, session.camera.cy);
+      return 0;
+    };
+  });
+}
+
+}  // namespace rgbdmap
