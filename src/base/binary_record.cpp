@@ -1,10 +1,14 @@
 #include "rgbdmap/base/binary_record.hpp"
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <fstream>
 #include <sstream>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_io.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -20,8 +24,10 @@ struct Header {
 };
 static_assert(sizeof(Header) == 32, "the header is 32 bytes on disk");
 
-std::uint64_t fnv1a(const char* data, std::size_t size) {
-  std::uint64_t hash = 0xcbf29ce484222325ull;
+constexpr std::uint64_t kFnvOffset = 0xcbf29ce484222325ull;
+constexpr std::size_t kBufferBytes = 1 << 20;
+
+std::uint64_t fnv1a(const char* data, std::size_t size, std::uint64_t hash = kFnvOffset) {
   for (std::size_t i = 0; i < size; ++i) {
     hash ^= static_cast<unsigned char>(data[i]);
     hash *= 0x100000001b3ull;
@@ -54,16 +60,48 @@ std::size_t BinaryReader::count(std::size_t element_bytes) {
 
 void BinaryReader::fail(const std::string& what) const { throw InputError(file_ + ": " + what); }
 
-std::string sealRecord(const char (&kind)[5], std::uint32_t version, const std::string& payload) {
+RecordWriter::RecordWriter(int fd, const char (&kind)[5], std::uint32_t version)
+    : fd_(fd), version_(version), hash_(kFnvOffset) {
+  std::memcpy(kind_, kind, 4);
+  buffer_.assign(sizeof(Header), '\0');  // filled in by finish()
+  buffer_.reserve(kBufferBytes);
+}
+
+void RecordWriter::putBytes(const void* data, std::size_t size) {
+  const char* bytes = static_cast<const char*>(data);
+  hash_ = fnv1a(bytes, size, hash_);
+  size_ += size;
+  while (size > 0) {
+    const std::size_t take = std::min(size, kBufferBytes - std::min(kBufferBytes, buffer_.size()));
+    buffer_.append(bytes, take);
+    bytes += take;
+    size -= take;
+    if (buffer_.size() >= kBufferBytes) flush();
+  }
+}
+
+void RecordWriter::flush() {
+  if (ok_ && !writeAll(fd_, buffer_.data(), buffer_.size())) {
+    ok_ = false;
+    error_ = errno;
+  }
+  buffer_.clear();
+}
+
+bool RecordWriter::finish() {
+  flush();
   Header header{};
   std::memcpy(header.magic, kMagic, sizeof kMagic);
-  std::memcpy(header.kind, kind, 4);
-  header.version = version;
-  header.size = payload.size();
-  header.hash = fnv1a(payload.data(), payload.size());
-  std::string out(reinterpret_cast<const char*>(&header), sizeof header);
-  out += payload;
-  return out;
+  std::memcpy(header.kind, kind_, 4);
+  header.version = version_;
+  header.size = size_;
+  header.hash = hash_;
+  if (ok_ && ::pwrite(fd_, &header, sizeof header, 0) != static_cast<ssize_t>(sizeof header)) {
+    ok_ = false;
+    error_ = errno;
+  }
+  if (!ok_) errno = error_;
+  return ok_;
 }
 
 BinaryReader openRecord(const std::string& path, const char (&kind)[5], std::uint32_t version) {

@@ -45,20 +45,6 @@ std::string describeErrno(int error) {
 
 }  // namespace
 
-// SIGXFSZ is ignored, so a file-size limit fails the write with EFBIG instead of killing us.
-bool writeAll(int fd, const char* data, std::size_t size) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, data, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return false;
-    }
-    data += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
 namespace {
 
 // Binary PCD with fields x y z rgb (16 bytes a point), written with plain write() calls so that

@@ -32,7 +32,7 @@ constexpr char kKeyframesKind[5] = "KFRM";
 // A place's descriptors are ORB's: 32 bytes a row.
 constexpr int kDescriptorBytes = 32;
 
-void putPose(BinaryWriter& out, const Eigen::Isometry3d& pose) {
+void putPose(RecordWriter& out, const Eigen::Isometry3d& pose) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c) out.put<double>(pose.matrix()(r, c));
 }
@@ -48,8 +48,7 @@ Eigen::Isometry3d getPose(BinaryReader& in) {
   return pose;
 }
 
-std::string graphPayload(const Session& s) {
-  BinaryWriter out;
+void writeGraph(const Session& s, RecordWriter& out) {
   const CameraIntrinsics& c = s.camera;
   out.put<std::int32_t>(c.width);
   out.put<std::int32_t>(c.height);
@@ -68,7 +67,6 @@ std::string graphPayload(const Session& s) {
     putPose(out, e.measurement);
     for (int i = 0; i < 36; ++i) out.put<double>(e.sqrt_information.data()[i]);
   }
-  return out.data();
 }
 
 void readGraph(BinaryReader in, Session& s) {
@@ -102,8 +100,7 @@ void readGraph(BinaryReader in, Session& s) {
   if (!in.atEnd()) in.fail("corrupt (bytes after the edges)");
 }
 
-std::string placesPayload(const Session& s) {
-  BinaryWriter out;
+void writePlaces(const Session& s, RecordWriter& out) {
   out.put<std::uint64_t>(s.graph.places.size());
   for (const auto& place : s.graph.places) {
     out.put<std::uint8_t>(place ? 1 : 0);
@@ -124,7 +121,6 @@ std::string placesPayload(const Session& s) {
       out.putBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
     }
   }
-  return out.data();
 }
 
 void readPlaces(BinaryReader in, Session& s) {
@@ -159,7 +155,7 @@ void readPlaces(BinaryReader in, Session& s) {
   if (!in.atEnd()) in.fail("corrupt (bytes after the places)");
 }
 
-void putBlob(BinaryWriter& out, const std::shared_ptr<const std::vector<std::uint8_t>>& blob) {
+void putBlob(RecordWriter& out, const std::shared_ptr<const std::vector<std::uint8_t>>& blob) {
   const std::size_t size = blob ? blob->size() : 0;
   out.put<std::uint64_t>(size);
   if (size > 0) out.putBytes(blob->data(), size);
@@ -171,8 +167,7 @@ std::shared_ptr<const std::vector<std::uint8_t>> getBlob(BinaryReader& in) {
   return std::make_shared<const std::vector<std::uint8_t>>(std::move(blob));
 }
 
-std::string keyframesPayload(const Session& s) {
-  BinaryWriter out;
+void writeKeyframes(const Session& s, RecordWriter& out) {
   out.put<double>(KeyframeStore::kInverseDepthUnits);
   out.put<std::int32_t>(KeyframeStore::kColourBitsDropped);
   out.put<std::uint64_t>(s.keyframes.size());
@@ -185,7 +180,6 @@ std::string keyframesPayload(const Session& s) {
     putBlob(out, e.depth_png);
     putBlob(out, e.colour_png);
   }
-  return out.data();
 }
 
 void readKeyframes(BinaryReader in, Session& s) {
@@ -281,16 +275,23 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   }
   const auto in = [&fresh](const char* name) { return fresh + "/" + name; };
   SessionSummary summary = summarise(session, fresh);
-  const bool written =
-      writeText(in(kGraphFile),
-                sealRecord(kGraphKind, Session::kFormatVersion, graphPayload(session)), error) &&
-      writeText(in(kPlacesFile),
-                sealRecord(kPlacesKind, Session::kFormatVersion, placesPayload(session)), error) &&
-      writeText(in(kKeyframesFile),
-                sealRecord(kKeyframesKind, Session::kFormatVersion, keyframesPayload(session)),
-                error) &&
-      writeText(in(kConfigFile), session.configuration, error) &&
-      writeText(in(kSummaryFile), summaryText(session, summary), error);
+  // Each record streamed to its file (the kept keyframes' images are tens of MB: never copied).
+  const auto record = [&](const char* name, const char(&kind)[5],
+                          void (*write)(const Session&, RecordWriter&)) {
+    return writeFileAtomically(
+        in(name),
+        [&](int fd) {
+          RecordWriter out(fd, kind, Session::kFormatVersion);
+          write(session, out);
+          return out.finish();
+        },
+        error);
+  };
+  const bool written = record(kGraphFile, kGraphKind, writeGraph) &&
+                       record(kPlacesFile, kPlacesKind, writePlaces) &&
+                       record(kKeyframesFile, kKeyframesKind, writeKeyframes) &&
+                       writeText(in(kConfigFile), session.configuration, error) &&
+                       writeText(in(kSummaryFile), summaryText(session, summary), error);
   if (!written) {
     fs::remove_all(fresh, ec);
     return false;

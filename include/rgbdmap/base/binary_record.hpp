@@ -12,25 +12,37 @@ namespace rgbdmap {
 // payload, little-endian as x86-64 and ARM64 store it. A reader refuses another kind, another
 // version, a truncated file and a changed byte, with a message naming the file.
 
-// Appends values to a payload.
-class BinaryWriter {
+// Writes one record to a file as it goes (a payload of tens of MB is never held twice): a header
+// left blank, the payload through a 1 MB buffer, hashed on the way, then the header filled in.
+class RecordWriter {
  public:
+  // `fd`: an empty file open for writing (and seeking).
+  RecordWriter(int fd, const char (&kind)[5], std::uint32_t version);
+
   template <typename T>
   void put(const T& value) {
     static_assert(std::is_trivially_copyable_v<T>, "plain values only");
     putBytes(&value, sizeof value);
   }
-  void putBytes(const void* data, std::size_t size) {
-    data_.append(static_cast<const char*>(data), size);
-  }
+  void putBytes(const void* data, std::size_t size);
   void putString(const std::string& text) {
     put<std::uint64_t>(text.size());
     putBytes(text.data(), text.size());
   }
-  const std::string& data() const { return data_; }
+  // Writes what is buffered and the header. False (errno set) when any write failed.
+  bool finish();
 
  private:
-  std::string data_;
+  void flush();
+
+  int fd_;
+  char kind_[4];
+  std::uint32_t version_;
+  std::string buffer_;
+  std::uint64_t size_ = 0;
+  std::uint64_t hash_;
+  bool ok_ = true;
+  int error_ = 0;
 };
 
 // Reads a payload back; every read past its end or count beyond what is left throws InputError
@@ -61,8 +73,6 @@ class BinaryReader {
   std::size_t at_ = 0;
 };
 
-// The payload behind its header, as written to a file.
-std::string sealRecord(const char (&kind)[5], std::uint32_t version, const std::string& payload);
 // Reads `path` and checks its header against `kind` and `version`; throws InputError naming the
 // file and what is wrong (missing, another kind, another version, truncated, corrupt).
 BinaryReader openRecord(const std::string& path, const char (&kind)[5], std::uint32_t version);

@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "rgbdmap/base/file_io.hpp"
 #include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
@@ -27,9 +28,6 @@ bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::str
 // The same for any format: `write` writes the whole file to `fd` (false with errno set).
 bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
                          std::string& error);
-// Writes all of `size` bytes; false with errno set on any failure (a full disk, a quota, a
-// file-size limit).
-bool writeAll(int fd, const char* data, std::size_t size);
 
 // A background thread that writes map snapshots while mapping goes on. Only the newest pending
 // snapshot is kept: if mapping produces snapshots faster than the disk takes them, older
