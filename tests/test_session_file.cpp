@@ -2,6 +2,7 @@
 // back whole, and a truncated, corrupt or other-version session is refused naming the file.
 
 #include <gtest/gtest.h>
+#include <pcl/kdtree/kdtree_flann.h>
 
 #include <cmath>
 #include <filesystem>
@@ -171,6 +172,34 @@ TEST(SessionFile, TruncatedCorruptOrOtherVersionIsRefusedNamingTheFile) {
   EXPECT_NE(output.find(s + "/graph.bin: truncated"), std::string::npos) << output;
   EXPECT_EQ(test::run(test::binary() + " session " + mappedRun() + "/map.session", &output), 0);
   EXPECT_NE(output.find("rgbdmap session, format version 1"), std::string::npos) << output;
+}
+
+// The session holds the map in the form fusion goes on from: its kept keyframes fused at the
+// graph's poses give back the map the run wrote.
+TEST(SessionFile, ItsKeyframesFusedAgainGiveTheMapTheRunWrote) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " session " + mappedRun() + "/map.session --map " + dir +
+                          "/again.pcd",
+                      &output),
+            0)
+      << output;
+  const MapCloud written = test::loadMap(mappedRun() + "/map.pcd");
+  const MapCloud again = test::loadMap(dir + "/again.pcd");
+  ASSERT_GT(written.size(), 100000u);
+  EXPECT_NEAR(static_cast<double>(again.size()), static_cast<double>(written.size()),
+              0.01 * written.size());
+  pcl::KdTreeFLANN<MapCloud::PointType> tree;
+  tree.setInputCloud(written.makeShared());
+  std::vector<int> index(1);
+  std::vector<float> squared(1);
+  std::size_t near = 0, checked = 0;
+  // Within a voxel (1 cm): the kept images are quantised (inverse depth in steps of half the
+  // sensor's noise), as for the mapper's own re-fusion, so the surface moves by a millimetre or
+  // two and a few fringe voxels (seen once) come and go. Measured 96.9%.
+  for (std::size_t i = 0; i < again.size(); i += 7, ++checked)
+    if (tree.nearestKSearch(again[i], 1, index, squared) == 1 && squared[0] <= 1e-4f) ++near;
+  EXPECT_GE(static_cast<double>(near), 0.95 * checked) << near << " of " << checked;
 }
 
 TEST(SessionFile, NotSavedWhenTurnedOffOrWithoutLoopClosure) {

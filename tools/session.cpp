@@ -1,7 +1,11 @@
 // `rgbdmap session MAP.session`: reads a saved session through, says what it holds, and refuses
 // one that is from another format version, truncated or corrupt (exit 2, naming the file).
+#include <chrono>
 #include <cstdio>
 
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
 
@@ -11,9 +15,13 @@ void addSessionCommand(CLI::App& app, Command& selected) {
   auto* cmd = app.add_subcommand(
       "session", "check a saved session (MAP.session) and say what it holds (docs/sessions.md)");
   auto path = std::make_shared<std::string>();
+  auto map = std::make_shared<std::string>();
   cmd->add_option("session", *path, "the session folder, MAP.session beside MAP.pcd")->required();
-  cmd->callback([path, &selected] {
-    selected = [path] {
+  cmd->add_option("--map", *map,
+                  "also fuse the session's kept keyframes at the graph's poses and write the map "
+                  "it holds to this PCD");
+  cmd->callback([path, map, &selected] {
+    selected = [path, map] {
       const Session session = readSession(*path);
       const SessionSummary s = summarise(session, *path);
       std::size_t place_points = 0;
@@ -34,6 +42,25 @@ void addSessionCommand(CLI::App& app, Command& selected) {
           s.keyframes, last - first, first, last, s.edges, s.loop_edges, s.places, place_points,
           s.kept_keyframes, session.camera.width, session.camera.height, session.camera.fx,
           session.camera.fy, session.camera.cx, session.camera.cy);
+      if (!map->empty()) {
+        // With the run's own configuration: the same voxels, filters and observation count.
+        Config config;
+        config.loadYaml(*path + "/config.yaml");
+        static_cast<CameraIntrinsics&>(config.camera) = session.camera;
+        const auto start = std::chrono::steady_clock::now();
+        RunStats stats;
+        PoseCorrections corrections;
+        Mapper mapper(session.camera, config.filter, config.map, config.refusion, stats,
+                      &corrections);
+        fuseSession(session, corrections, mapper);
+        const std::shared_ptr<const MapCloud> cloud = mapper.snapshot();
+        std::string error;
+        if (!writePcdAtomically(*cloud, *map, error)) throw InputError(error);
+        std::printf(
+            "map: %zu points from %zu kept keyframes written to %s in %.1f s\n", cloud->size(),
+            session.keyframes.size(), map->c_str(),
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      }
       return 0;
     };
   });

@@ -100,8 +100,9 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
   return let_go;
 }
 
-void KeyframeStore::decode(std::size_t i, Frame& frame) {
-  const Entry& e = entries_.at(i);
+void KeyframeStore::decode(std::size_t i, Frame& frame) { decode(entries_.at(i), frame); }
+
+void KeyframeStore::decode(const Entry& e, Frame& frame) {
   std::string error;
   if (decoder_.decode(e.depth_png->data(), e.depth_png->size(), PngDecoder::Mode::kDepth, units_,
                       error) != PngDecoder::Status::kDecoded ||

@@ -335,4 +335,23 @@ Session readSession(const std::string& path) {
   return session;
 }
 
+PoseCorrections::Table correctionsOf(const Session& session) {
+  PoseCorrections::Table table;
+  table.reserve(session.graph.keyframes.size());
+  for (const LoopCloser::Saved::Keyframe& k : session.graph.keyframes)
+    table.push_back(k.pose * k.odometry.inverse());
+  return table;
+}
+
+void fuseSession(const Session& session, PoseCorrections& corrections, Mapper& mapper) {
+  corrections.publish(correctionsOf(session));
+  KeyframeStore decoder(0);
+  Frame frame;
+  for (const KeyframeStore::Entry& entry : session.keyframes) {
+    decoder.decode(entry, frame);
+    mapper.fuse(frame);
+  }
+  mapper.settle();
+}
+
 }  // namespace rgbdmap

@@ -56,6 +56,8 @@ class KeyframeStore {
   // The stored images back into `frame` (depth in metres, colour BGR), with the entry's
   // timestamp, index, anchor and odometry pose.
   void decode(std::size_t i, Frame& frame);
+  // The same for an entry of another store (a saved session's).
+  void decode(const Entry& entry, Frame& frame);
   // The kept keyframes as they are now (the images shared, not copied).
   std::vector<Entry> entries() const { return entries_; }
   // How the images are stored (a session records them). Depth: a 16-bit PNG of K / depth

@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/mapping/keyframe_store.hpp"
+#include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
 
 namespace rgbdmap {
@@ -40,5 +41,12 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
 // format version, truncated or corrupt.
 Session readSession(const std::string& path);
 SessionSummary summarise(const Session& session, const std::string& path);
+
+// The corrections the session's graph makes to its keyframes' odometry (PoseCorrections'
+// table: optimised pose times the inverse of the odometry pose, by keyframe id).
+PoseCorrections::Table correctionsOf(const Session& session);
+// Fuses the session's kept keyframes into `mapper` at the graph's poses (the mapper made with
+// `corrections`, published here): the session's map, as a later run starts from it.
+void fuseSession(const Session& session, PoseCorrections& corrections, Mapper& mapper);
 
 }  // namespace rgbdmap
