@@ -38,6 +38,7 @@ std::uint64_t fnv1a(const char* data, std::size_t size, std::uint64_t hash = kFn
 }  // namespace
 
 void BinaryReader::getBytes(void* out, std::size_t size) {
+  if (size == 0) return;  // `out` may be an empty vector's null data()
   if (size > data_.size() - at_) fail("truncated or corrupt (a value runs past the end)");
   std::memcpy(out, data_.data() + at_, size);
   at_ += size;
@@ -68,6 +69,7 @@ RecordWriter::RecordWriter(int fd, const char (&kind)[5], std::uint32_t version)
 }
 
 void RecordWriter::putBytes(const void* data, std::size_t size) {
+  if (size == 0) return;
   const char* bytes = static_cast<const char*>(data);
   hash_ = fnv1a(bytes, size, hash_);
   size_ += size;
