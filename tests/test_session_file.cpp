@@ -126,6 +126,29 @@ TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
   EXPECT_EQ(refusal(again), "");
 }
 
+// A checkpoint taken while the loop closer still has the newest keyframes queued: kept keyframes
+// anchored beyond its graph, fewer places than keyframes. Such a session is whole, and reads.
+TEST(SessionFile, ASessionSavedWhileLoopClosureLagsReads) {
+  Session lagging = readSession(mappedRun() + "/map.session");
+  const std::size_t graph = lagging.graph.keyframes.size() - 3;
+  lagging.graph.keyframes.resize(graph);
+  std::vector<PoseGraph::Edge> edges;
+  for (const PoseGraph::Edge& e : lagging.graph.edges)
+    if (static_cast<std::size_t>(std::max(e.from, e.to)) < graph) edges.push_back(e);
+  lagging.graph.edges = edges;
+  lagging.graph.places.resize(graph - 2);
+  ASSERT_GT(lagging.keyframes.back().anchor, static_cast<std::int64_t>(graph));
+  const std::string path = test::freshDir() + "/lagging.session";
+  std::string error;
+  ASSERT_TRUE(writeSession(lagging, path, error)) << error;
+  const Session read = readSession(path);
+  EXPECT_EQ(read.graph.keyframes.size(), graph);
+  EXPECT_EQ(read.graph.places.size(), graph);  // the newest without a place
+  EXPECT_FALSE(read.graph.places.back());
+  EXPECT_EQ(read.keyframes.size(), lagging.keyframes.size());
+  EXPECT_EQ(read.keyframes.back().anchor, lagging.keyframes.back().anchor);
+}
+
 TEST(SessionFile, TruncatedCorruptOrOtherVersionIsRefusedNamingTheFile) {
   const std::string dir = test::freshDir();
   {

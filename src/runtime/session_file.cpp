@@ -124,8 +124,10 @@ void writePlaces(const Session& s, RecordWriter& out) {
 }
 
 void readPlaces(BinaryReader in, Session& s) {
+  // At most one a keyframe: a place is added to the loop closer after its graph's node, so a
+  // session written while it runs may have fewer (the newest keyframes then have none).
   const std::size_t count = in.count(1);
-  if (count != s.graph.keyframes.size())
+  if (count > s.graph.keyframes.size())
     in.fail("corrupt (" + std::to_string(count) + " places for " +
             std::to_string(s.graph.keyframes.size()) + " keyframes)");
   s.graph.places.resize(count);
@@ -153,6 +155,7 @@ void readPlaces(BinaryReader in, Session& s) {
     slot = std::move(place);
   }
   if (!in.atEnd()) in.fail("corrupt (bytes after the places)");
+  s.graph.places.resize(s.graph.keyframes.size());
 }
 
 void putBlob(RecordWriter& out, const std::shared_ptr<const std::vector<std::uint8_t>>& blob) {
@@ -195,9 +198,10 @@ void readKeyframes(BinaryReader in, Session& s) {
     e.fused_at = getPose(in);
     e.depth_png = getBlob(in);
     e.colour_png = getBlob(in);
-    if (e.anchor >= static_cast<std::int64_t>(s.graph.keyframes.size()))
-      in.fail("corrupt (a kept keyframe anchored to keyframe " + std::to_string(e.anchor) + " of " +
-              std::to_string(s.graph.keyframes.size()) + ")");
+    // An anchor may lie beyond the graph: a checkpoint taken while the loop closer still had the
+    // newest keyframes queued. Such a keyframe shares the newest correction, as in the run.
+    if (e.anchor < -1)
+      in.fail("corrupt (a kept keyframe anchored to " + std::to_string(e.anchor) + ")");
   }
   if (!in.atEnd()) in.fail("corrupt (bytes after the keyframes)");
 }
