@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <pcl/kdtree/kdtree_flann.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -24,8 +25,10 @@ const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
 // Maps fr1/rpy's 100 frames with odometry and loop closure (the default for a camera), once.
 const std::string& mappedRun() {
   static const std::string dir = [] {
-    // Its own folder: each test's freshDir() is emptied when the test asks for it.
-    const std::string d = std::string(RGBDMAP_TEST_TMP) + "/SessionFile.run";
+    // A folder of this process's own: CTest runs each test in its own process, in parallel, and
+    // each maps once (a shared folder was emptied by one while another read it).
+    const std::string d =
+        std::string(RGBDMAP_TEST_TMP) + "/SessionFile.run." + std::to_string(::getpid());
     fs::remove_all(d);
     fs::create_directories(d);
     std::string output;
