@@ -100,6 +100,11 @@ bool writeFileAtomically(const std::string& path, const std::function<bool(int f
   return true;
 }
 
+bool writeBytesAtomically(const std::string& path, const std::string& bytes, std::string& error) {
+  return writeFileAtomically(
+      path, [&bytes](int fd) { return writeAll(fd, bytes.data(), bytes.size()); }, error);
+}
+
 bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error) {
   return writeFileAtomically(
       path, [&](int fd) { return writePcd(cloud, fd); }, error);

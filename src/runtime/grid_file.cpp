@@ -67,11 +67,6 @@ std::string yamlText(const OccupancyGrid& grid, const std::string& pgm_path) {
       kOccupiedThresh, kFreeThresh, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
 }
 
-bool writeText(const std::string& path, const std::string& text, std::string& error) {
-  return writeFileAtomically(
-      path, [&text](int fd) { return writeAll(fd, text.data(), text.size()); }, error);
-}
-
 }  // namespace
 
 std::string gridYamlPath(const std::string& pgm_path) {
@@ -85,8 +80,8 @@ std::string gridYamlPath(const std::string& pgm_path) {
 bool writeGridAtomically(const OccupancyGrid& grid, const std::string& pgm_path,
                          std::string& error) {
   // The image first: a YAML never names an image that is not there.
-  return writeText(pgm_path, pgmBytes(grid), error) &&
-         writeText(gridYamlPath(pgm_path), yamlText(grid, pgm_path), error);
+  return writeBytesAtomically(pgm_path, pgmBytes(grid), error) &&
+         writeBytesAtomically(gridYamlPath(pgm_path), yamlText(grid, pgm_path), error);
 }
 
 OccupancyGrid readGrid(const std::string& yaml_path) {

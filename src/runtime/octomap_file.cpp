@@ -36,9 +36,7 @@ bool writeOctomapAtomically(const MapCloud& surface, const FreeSpaceMap& free_sp
   counts = {};
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it)
     ++(tree.isNodeOccupied(*it) ? counts.occupied : counts.free);
-  const std::string data = bytes.str();
-  return writeFileAtomically(
-      path, [&data](int fd) { return writeAll(fd, data.data(), data.size()); }, error);
+  return writeBytesAtomically(path, bytes.str(), error);
 }
 
 }  // namespace rgbdmap

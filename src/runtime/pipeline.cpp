@@ -91,8 +91,8 @@ CheckpointWriter::OctomapFile octomapFile(const PipelineOutputs& outputs, const 
 }
 
 // The session saved with a checkpoint (MAP.session/, with loop closure unless
-// checkpoint.session=false): the graph and places as they are now, and the kept keyframes taken on
-// the fusion thread (their images shared, not copied).
+// checkpoint.session=false): the kept keyframes taken on the fusion thread (their images shared,
+// not copied); the graph and places as they are when the writer gets to them.
 CheckpointWriter::SessionFile sessionFile(const PipelineOutputs& outputs, const Mapper& mapper,
                                           const LoopCloser* loop_closer, const Config& config,
                                           const std::string& configuration) {
@@ -101,7 +101,7 @@ CheckpointWriter::SessionFile sessionFile(const PipelineOutputs& outputs, const 
   session->created_by = std::string("rgbdmap ") + RGBDMAP_VERSION;
   session->camera = config.camera;
   session->configuration = configuration;
-  session->graph = loop_closer->save();
+  session->live_graph = loop_closer;
   session->keyframes = mapper.keptKeyframes().entries();
   return {std::move(session), outputs.session_path};
 }

@@ -48,25 +48,47 @@ Eigen::Isometry3d getPose(BinaryReader& in) {
   return pose;
 }
 
-void writeGraph(const Session& s, RecordWriter& out) {
-  const CameraIntrinsics& c = s.camera;
-  out.put<std::int32_t>(c.width);
-  out.put<std::int32_t>(c.height);
-  for (const double v : {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3}) out.put(v);
-  out.put<std::uint64_t>(s.graph.keyframes.size());
-  for (const LoopCloser::Saved::Keyframe& k : s.graph.keyframes) {
+// The graph's keyframes and edges, counted into `summary`, from a saved graph or a live one.
+template <typename Graph>
+void putGraph(const Graph& graph, RecordWriter& out, SessionSummary& summary) {
+  summary.keyframes = graph.keyframes();
+  out.put<std::uint64_t>(summary.keyframes);
+  for (std::size_t id = 0; id < summary.keyframes; ++id) {
+    const LoopCloser::Saved::Keyframe k = graph.keyframe(id);
     out.put(k.timestamp);
     putPose(out, k.odometry);
     putPose(out, k.pose);
   }
-  out.put<std::uint64_t>(s.graph.edges.size());
-  for (const PoseGraph::Edge& e : s.graph.edges) {
+  summary.edges = graph.edges().size();
+  out.put<std::uint64_t>(summary.edges);
+  for (const PoseGraph::Edge& e : graph.edges()) {
     out.put<std::int32_t>(e.from);
     out.put<std::int32_t>(e.to);
     out.put<std::uint8_t>(e.loop ? 1 : 0);
     putPose(out, e.measurement);
     for (int i = 0; i < 36; ++i) out.put<double>(e.sqrt_information.data()[i]);
+    summary.loop_edges += e.loop ? 1 : 0;
   }
+}
+
+// A saved graph seen like a live one (LoopCloser::GraphView).
+struct SavedGraphView {
+  const LoopCloser::Saved& saved;
+  std::size_t keyframes() const { return saved.keyframes.size(); }
+  const LoopCloser::Saved::Keyframe& keyframe(std::size_t id) const { return saved.keyframes[id]; }
+  const std::vector<PoseGraph::Edge>& edges() const { return saved.edges; }
+};
+
+void writeGraph(const Session& s, RecordWriter& out, SessionSummary& summary) {
+  const CameraIntrinsics& c = s.camera;
+  out.put<std::int32_t>(c.width);
+  out.put<std::int32_t>(c.height);
+  for (const double v : {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3}) out.put(v);
+  if (s.live_graph)
+    s.live_graph->readGraph(
+        [&](const LoopCloser::GraphView& graph) { putGraph(graph, out, summary); });
+  else
+    putGraph(SavedGraphView{s.graph}, out, summary);
 }
 
 void readGraph(BinaryReader in, Session& s) {
@@ -100,11 +122,19 @@ void readGraph(BinaryReader in, Session& s) {
   if (!in.atEnd()) in.fail("corrupt (bytes after the edges)");
 }
 
-void writePlaces(const Session& s, RecordWriter& out) {
-  out.put<std::uint64_t>(s.graph.places.size());
-  for (const auto& place : s.graph.places) {
+// After writeGraph(): at most one place a keyframe written (a live loop closer may have added
+// keyframes and places since).
+void writePlaces(const Session& s, RecordWriter& out, SessionSummary& summary) {
+  std::vector<std::shared_ptr<const PlaceRecognition::Place>> live;
+  if (s.live_graph) live = s.live_graph->places();
+  const auto& places = s.live_graph ? live : s.graph.places;
+  const std::size_t count = std::min(places.size(), summary.keyframes);
+  out.put<std::uint64_t>(count);
+  for (std::size_t id = 0; id < count; ++id) {
+    const auto& place = places[id];
     out.put<std::uint8_t>(place ? 1 : 0);
     if (!place) continue;
+    ++summary.places;
     const RelocalisationView& view = place->view;
     out.put<std::uint64_t>(view.points.size());
     for (const cv::Point3f& p : view.points) out.put(p);
@@ -170,9 +200,10 @@ std::shared_ptr<const std::vector<std::uint8_t>> getBlob(BinaryReader& in) {
   return std::make_shared<const std::vector<std::uint8_t>>(std::move(blob));
 }
 
-void writeKeyframes(const Session& s, RecordWriter& out) {
+void writeKeyframes(const Session& s, RecordWriter& out, SessionSummary& summary) {
   out.put<double>(KeyframeStore::kInverseDepthUnits);
   out.put<std::int32_t>(KeyframeStore::kColourBitsDropped);
+  summary.kept_keyframes = s.keyframes.size();
   out.put<std::uint64_t>(s.keyframes.size());
   for (const KeyframeStore::Entry& e : s.keyframes) {
     out.put(e.timestamp);
@@ -222,9 +253,12 @@ std::string summaryText(const Session& s, const SessionSummary& summary) {
   return out.str();
 }
 
-bool writeText(const std::string& path, const std::string& text, std::string& error) {
-  return writeFileAtomically(
-      path, [&](int fd) { return writeAll(fd, text.data(), text.size()); }, error);
+std::uint64_t folderBytes(const std::string& path) {
+  std::uint64_t bytes = 0;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(path, ec))
+    if (entry.is_regular_file(ec)) bytes += entry.file_size(ec);
+  return bytes;
 }
 
 void syncFolder(const std::string& path) {
@@ -261,9 +295,7 @@ SessionSummary summarise(const Session& s, const std::string& path) {
   for (const PoseGraph::Edge& e : s.graph.edges) summary.loop_edges += e.loop ? 1 : 0;
   for (const auto& place : s.graph.places) summary.places += place ? 1 : 0;
   summary.kept_keyframes = s.keyframes.size();
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(path, ec))
-    if (entry.is_regular_file(ec)) summary.bytes += entry.file_size(ec);
+  summary.bytes = folderBytes(path);
   return summary;
 }
 
@@ -278,15 +310,15 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
     return false;
   }
   const auto in = [&fresh](const char* name) { return fresh + "/" + name; };
-  SessionSummary summary = summarise(session, fresh);
+  SessionSummary summary;  // counted as written
   // Each record streamed to its file (the kept keyframes' images are tens of MB: never copied).
   const auto record = [&](const char* name, const char(&kind)[5],
-                          void (*write)(const Session&, RecordWriter&)) {
+                          void (*write)(const Session&, RecordWriter&, SessionSummary&)) {
     return writeFileAtomically(
         in(name),
         [&](int fd) {
           RecordWriter out(fd, kind, Session::kFormatVersion);
-          write(session, out);
+          write(session, out, summary);
           return out.finish();
         },
         error);
@@ -294,8 +326,8 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   const bool written = record(kGraphFile, kGraphKind, writeGraph) &&
                        record(kPlacesFile, kPlacesKind, writePlaces) &&
                        record(kKeyframesFile, kKeyframesKind, writeKeyframes) &&
-                       writeText(in(kConfigFile), session.configuration, error) &&
-                       writeText(in(kSummaryFile), summaryText(session, summary), error);
+                       writeBytesAtomically(in(kConfigFile), session.configuration, error) &&
+                       writeBytesAtomically(in(kSummaryFile), summaryText(session, summary), error);
   if (!written) {
     fs::remove_all(fresh, ec);
     return false;
@@ -313,7 +345,7 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   }
   if (exists) fs::remove_all(fresh, ec);
   syncFolder(fs::absolute(path).parent_path().string());
-  if (bytes) *bytes = summarise(session, path).bytes;
+  if (bytes) *bytes = folderBytes(path);
   return true;
 }
 

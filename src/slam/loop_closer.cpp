@@ -78,17 +78,13 @@ void LoopCloser::forgetPlaces() {
   for (std::size_t id = 0; id < nodes_.size(); ++id) places_.forget(static_cast<int>(id));
 }
 
-LoopCloser::Saved LoopCloser::save() const {
-  Saved saved;
-  saved.places = places_.places();
+LoopCloser::Saved::Keyframe LoopCloser::GraphView::keyframe(std::size_t id) const {
+  return {nodes_[id].timestamp, nodes_[id].odometry, graph_.pose(static_cast<int>(id))};
+}
+
+void LoopCloser::readGraph(const std::function<void(const GraphView&)>& read) const {
   std::lock_guard<std::mutex> lock(graph_mutex_);
-  saved.keyframes.reserve(nodes_.size());
-  for (std::size_t i = 0; i < nodes_.size(); ++i)
-    saved.keyframes.push_back(
-        {nodes_[i].timestamp, nodes_[i].odometry, graph_.pose(static_cast<int>(i))});
-  saved.edges.assign(graph_.edges().begin(), graph_.edges().end());
-  saved.places.resize(std::min(saved.places.size(), nodes_.size()));
-  return saved;
+  read(GraphView(nodes_, graph_));
 }
 
 void LoopCloser::run() {

@@ -28,6 +28,8 @@ bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::str
 // The same for any format: `write` writes the whole file to `fd` (false with errno set).
 bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
                          std::string& error);
+// The same for bytes held in memory (a text, an encoded image).
+bool writeBytesAtomically(const std::string& path, const std::string& bytes, std::string& error);
 
 // A background thread that writes map snapshots while mapping goes on. Only the newest pending
 // snapshot is kept: if mapping produces snapshots faster than the disk takes them, older

@@ -22,6 +22,9 @@ struct Session {
   CameraIntrinsics camera;
   std::string configuration;  // the effective configuration, YAML
   LoopCloser::Saved graph;
+  // Set while a run writes its session: the graph and places are then read from the loop closer
+  // as they are when written (streamed under its lock, not copied) and `graph` is not used.
+  const LoopCloser* live_graph = nullptr;
   std::vector<KeyframeStore::Entry> keyframes;  // the kept ones, images shared
 };
 

@@ -3,6 +3,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -23,6 +24,8 @@ namespace rgbdmap {
 // waits for it, except in a lossless replay when more than a few keyframes are queued (so that
 // a replay gives the same map every time).
 class LoopCloser : public KeyframeSink {
+  struct Node;  // a keyframe in the graph (below)
+
  public:
   // lossless: block addKeyframe() while the queue is full instead of skipping the search.
   // The first five as PlaceRecognition's.
@@ -31,7 +34,7 @@ class LoopCloser : public KeyframeSink {
              PoseCorrections& corrections, RunStats& stats, bool lossless);
   ~LoopCloser() override;
 
-  // What a saved session keeps of loop closure: every keyframe with its odometry and optimised
+  // What a session saved keeps of loop closure: every keyframe with its odometry and optimised
   // pose, the graph's edges, and the places (by keyframe id, null where none; shared).
   struct Saved {
     struct Keyframe {
@@ -44,11 +47,33 @@ class LoopCloser : public KeyframeSink {
     std::vector<std::shared_ptr<const PlaceRecognition::Place>> places;
   };
 
+  // The graph as it is, seen under its lock (GraphView is only made by readGraph()).
+  class GraphView {
+   public:
+    std::size_t keyframes() const { return nodes_.size(); }
+    Saved::Keyframe keyframe(std::size_t id) const;
+    const std::deque<PoseGraph::Edge>& edges() const { return graph_.edges(); }
+
+   private:
+    friend class LoopCloser;
+    GraphView(const std::vector<LoopCloser::Node>& nodes, const PoseGraph& graph)
+        : nodes_(nodes), graph_(graph) {}
+    const std::vector<LoopCloser::Node>& nodes_;
+    const PoseGraph& graph_;
+  };
+
   void addKeyframe(TrackedKeyframe keyframe) override;
   // Processes every queued keyframe, then stops the thread. The corrections are final after it.
   void finish();
-  // The graph and places as they are now. Any thread; waits at most for one optimisation.
-  Saved save() const;
+  // Calls `read` with the graph as it is now, from any thread: the loop thread waits while it
+  // runs, and it waits at most for one optimisation. A session streams the graph to its file
+  // this way (a copy of a long run's graph is megabytes, at every checkpoint).
+  void readGraph(const std::function<void(const GraphView&)>& read) const;
+  // The places by keyframe id (null where none; shared), at most one a keyframe of the graph
+  // as it was when readGraph() last returned or later.
+  std::vector<std::shared_ptr<const PlaceRecognition::Place>> places() const {
+    return places_.places();
+  }
   // Lets the places go (after finish() and the last save: no keyframe comes any more).
   void forgetPlaces();
 
@@ -82,7 +107,7 @@ class LoopCloser : public KeyframeSink {
   RunStats& stats_;
   bool lossless_;
   PlaceRecognition places_;
-  // Changed on the loop thread only, under `graph_mutex_` so that save() sees them whole.
+  // Changed on the loop thread only, under `graph_mutex_` so that readGraph() sees them whole.
   PoseGraph graph_;
   std::vector<Node> nodes_;
   mutable std::mutex graph_mutex_;
