@@ -3,6 +3,8 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -14,6 +16,7 @@
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/pose_source.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/map_renderer.hpp"
@@ -32,6 +35,7 @@ struct CommandLine {
   std::string mesh;
   std::string grid;
   std::string octomap;
+  std::string localise;  // a saved session to localise in
   std::string viewer = "auto";
   bool no_render = false;
   bool quiet = false;
@@ -44,6 +48,30 @@ bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   if (!control.stop.load()) return false;
   spdlog::info("stopped during start-up: nothing mapped, no map written");
   return true;
+}
+
+// The session --localise names, read whole (exit 2 naming the file when it cannot be), after the
+// checks that keep the saved map as it is.
+std::shared_ptr<const rgbdmap::Session> openSessionToLocaliseIn(const CommandLine& o) {
+  using namespace rgbdmap;
+  namespace fs = std::filesystem;
+  if (!o.mesh.empty() || !o.grid.empty() || !o.octomap.empty())
+    throw InputError("--localise " + o.localise +
+                     ": nothing is mapped while localising (no --mesh, --grid or --octomap)");
+  std::string saved = o.localise;
+  while (saved.size() > 1 && saved.back() == '/') saved.pop_back();
+  std::error_code ec;
+  if (fs::weakly_canonical(sessionPathOf(o.out), ec) == fs::weakly_canonical(saved, ec))
+    throw InputError("--localise " + o.localise + ": --out " + o.out +
+                     " would write beside the saved map; give the localisation run its own name "
+                     "(e.g. --out localised.pcd: its trajectory is localised_trajectory.txt)");
+  auto session = std::make_shared<const Session>(readSession(o.localise));
+  spdlog::info("localising in {}: {} keyframes, {} places ({})", o.localise,
+               session->graph.keyframes.size(),
+               std::count_if(session->graph.places.begin(), session->graph.places.end(),
+                             [](const auto& p) { return p != nullptr; }),
+               session->created_by);
+  return session;
 }
 
 int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunSignals& signals) {
@@ -63,6 +91,8 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
   if (!o.grid.empty()) checkOutputFolder(o.grid, "--grid");
   if (!o.octomap.empty()) checkOutputFolder(o.octomap, "--octomap");
+  std::shared_ptr<const Session> localise_in;
+  if (!o.localise.empty()) localise_in = openSessionToLocaliseIn(o);
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string& s : o.sets) {
@@ -73,14 +103,26 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (stoppedDuringStartUp(control)) return 0;
+  // Localising needs the camera's own motion between placements.
+  if (localise_in && config.pose.source == "auto") config.pose.source = "odometry";
   config.pose.source = resolvePoseSource(
       config.pose.source, source->providesPoses(),
       source->describe() +
           ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
 
+  if (localise_in && !tracksKeyframes(config.pose, config.tracking))
+    throw InputError("--localise " + o.localise + ": needs the camera's odometry (pose.source=" +
+                     config.pose.source + ", tracking.method=" + config.tracking.method +
+                     "); use --set pose.source=odometry");
   PipelineOutputs outputs = outputsBeside(o.out, o.mesh);
   outputs.grid_path = o.grid;
   outputs.octomap_path = o.octomap;
+  if (localise_in) {
+    // Nothing is mapped: the run writes where it was, every frame in the saved map's frame.
+    outputs.map_path.clear();
+    outputs.trajectory_path.clear();
+    outputs.session_path.clear();
+  }
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 
@@ -92,7 +134,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   {
     const std::unique_ptr<Viewer> viewer = openRunViewer(o.viewer, control, o.out);
     if (viewer) outputs.publisher = &viewer->mailbox();
-    Pipeline pipeline(config, std::move(source), outputs);
+    Pipeline pipeline(config, std::move(source), outputs, localise_in);
     code = pipeline.run(control);
     if (!o.stats_file.empty()) {
       std::ofstream stats(o.stats_file);
@@ -100,7 +142,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
       if (!stats) spdlog::error("{}: cannot write statistics", o.stats_file);
     }
   }
-  if (!o.no_render) {
+  if (!o.no_render && !localise_in) {
     std::string error;
     if (renderMapFile(o.out, outputs.trajectory_path, picturePathOf(o.out), {}, error))
       spdlog::info("picture of the map: {}", picturePathOf(o.out));
@@ -139,6 +181,9 @@ int main(int argc, char** argv) {
                  "map_server's format), with every save");
   app.add_option("--octomap", o.octomap,
                  "also write a binary OctoMap (.bt) of occupied and free space, with every save");
+  app.add_option("--localise", o.localise,
+                 "localise in a saved session (MAP.session) instead of mapping: every frame's "
+                 "pose in its map's frame, written to OUT_trajectory.txt; the map is not changed");
   app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
   app.add_option("--viewer", o.viewer, "live window: auto (when a display is available) | none")
       ->check(CLI::IsMember({"auto", "none"}))

@@ -61,6 +61,7 @@ std::string RunStats::toJson() const {
       << "  \"frames_tracked\": " << frames_tracked << ",\n"
       << "  \"frames_lost\": " << frames_lost << ",\n"
       << "  \"frames_relocalised\": " << frames_relocalised << ",\n"
+      << "  \"frames_unplaced\": " << frames_unplaced << ",\n"
       << "  \"keyframes_deferred\": " << keyframes_deferred << ",\n"
       << "  \"loop_closure\": " << (loop_closure ? "true" : "false") << ",\n"
       << "  \"loop_candidates\": " << loop_candidates << ",\n"

@@ -236,7 +236,8 @@ void CheckpointWriter::run() {
     result.path = path;
     result.points = cloud->size();
     const auto start = std::chrono::steady_clock::now();
-    result.ok = writePcdAtomically(*cloud, path, result.error);
+    // No path: a run that maps nothing (localisation) writes only its trajectories.
+    result.ok = path.empty() || writePcdAtomically(*cloud, path, result.error);
     // The destination still holds the last complete map (or nothing): say which.
     if (result.ok)
       last_good_ = result;

@@ -13,9 +13,11 @@
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/frame_tracker.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/status_line.hpp"
 #include "rgbdmap/runtime/tracking_thread.hpp"
 #include "rgbdmap/runtime/unmapped_frames.hpp"
+#include "rgbdmap/slam/localiser.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 
@@ -140,7 +142,11 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
                    r.session_seconds);
     if (r.ok) {
       stats.checkpoints_written.fetch_add(1);
-      spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path, r.seconds);
+      if (r.path.empty())  // localising: the trajectories alone
+        spdlog::info("checkpoint: trajectories written in {:.2f} s", r.seconds);
+      else
+        spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path,
+                     r.seconds);
     } else {
       stats.checkpoints_failed.fetch_add(1);
       spdlog::error("checkpoint failed, mapping goes on: {}", r.error);
@@ -164,7 +170,7 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
   if (!final_write.ok) {
     spdlog::error("final map not saved: {}", final_write.error);
     exit_code = 1;
-  } else {
+  } else if (!final_write.path.empty()) {
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
   }
   stats.peak_rss_mb = peakRssMb();
@@ -175,10 +181,35 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
   return exit_code;
 }
 
+// What a localisation run says at its end; 1 when the saved map was never recognised.
+int reportLocalisation(const Localiser::Counts& counts, const RunStats& stats) {
+  const std::uint64_t frames = stats.frames_processed.load();
+  const std::uint64_t unplaced = stats.frames_unplaced.load();
+  if (counts.first_placed < 0) {
+    spdlog::error(
+        "localisation: the saved map was never recognised ({} keyframes looked for); the {} "
+        "frames' poses are written in the run's own frame",
+        counts.searched, frames);
+    return 1;
+  }
+  spdlog::info(
+      "localisation: {} of {} frames posed in the saved map as they came, {} before it was "
+      "recognised (keyframe {}; written in its frame since); {} placements of {} keyframes looked "
+      "for{}",
+      frames - std::min(frames, unplaced), frames, unplaced, counts.first_placed, counts.placed,
+      counts.searched,
+      counts.skipped > 0 ? fmt::format(", {} skipped behind the camera", counts.skipped) : "");
+  return 0;
+}
+
 }  // namespace
 
-Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs)
-    : config_(std::move(config)), source_(std::move(source)), outputs_(std::move(outputs)) {}
+Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs,
+                   std::shared_ptr<const Session> localise_in)
+    : config_(std::move(config)),
+      source_(std::move(source)),
+      outputs_(std::move(outputs)),
+      localise_in_(std::move(localise_in)) {}
 
 int Pipeline::run(RunControl& control) {
   Config config = forSource(config_, *source_);
@@ -186,15 +217,24 @@ int Pipeline::run(RunControl& control) {
   const bool live = source_->isLive();
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
   // move the trajectories, and the map follows them (Mapper).
-  stats_.loop_closure = config.loop.enabled && tracksKeyframes(config.pose, config.tracking);
+  // Localising, the localiser publishes the corrections instead: the saved map's frame.
+  const bool localising = localise_in_ != nullptr && tracksKeyframes(config.pose, config.tracking);
+  stats_.loop_closure =
+      !localising && config.loop.enabled && tracksKeyframes(config.pose, config.tracking);
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
-  if (stats_.loop_closure) {
-    corrections = std::make_unique<PoseCorrections>();
+  std::unique_ptr<Localiser> localiser;
+  if (stats_.loop_closure || localising) corrections = std::make_unique<PoseCorrections>();
+  if (stats_.loop_closure)
     loop_closer = std::make_unique<LoopCloser>(config.camera, config.tracking, config.loop,
                                                config.filter.min_depth, config.filter.max_depth,
                                                *corrections, stats_, !live);
-  }
+  if (localising)
+    localiser = std::make_unique<Localiser>(localise_in_->graph, config.camera, config.tracking,
+                                            config.loop, config.filter.min_depth,
+                                            config.filter.max_depth, *corrections, stats_, !live);
+  KeyframeSink* keyframe_sink =
+      localiser ? static_cast<KeyframeSink*>(localiser.get()) : loop_closer.get();
   // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
   // frame (from the tracking side), streamed to their files rather than held.
   const std::shared_ptr<TrajectoryStream> keyframe_file =
@@ -205,18 +245,24 @@ int Pipeline::run(RunControl& control) {
   for (const auto& file : {keyframe_file, frame_file})
     if (file) trajectory_files.push_back(file);
   FrameTracker tracker(
-      makeKeyframeSelector(config.keyframe, config.pose),
+      localising ? KeyframeSelector(KeyframeSelector::Policy::kNone, config.keyframe)
+                 : makeKeyframeSelector(config.keyframe, config.pose),
       makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
-                       config.filter.max_depth, loop_closer.get()),
+                       config.filter.max_depth, keyframe_sink),
       stats_, frame_file.get());
   Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_,
                 corrections.get(), keyframe_file.get());
   mapper.keepMeshes(!outputs_.mesh_path.empty());
   if (!outputs_.octomap_path.empty()) mapper.keepFreeSpace(config.octomap);
   spdlog::info("source: {}", source_->describe());
-  spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
-               effectiveKeyframePolicy(config.keyframe, config.pose),
-               stats_.loop_closure ? "on" : "off");
+  if (localising)
+    spdlog::info("poses: {}, localising in a saved map of {} keyframes ({} places): nothing mapped",
+                 tracker.poses().describe(), localise_in_->graph.keyframes.size(),
+                 localiser->places());
+  else
+    spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
+                 effectiveKeyframePolicy(config.keyframe, config.pose),
+                 stats_.loop_closure ? "on" : "off");
   const std::string configuration = config.toYaml();
   if (!outputs_.config_path.empty()) std::ofstream(outputs_.config_path) << configuration;
   if (!stats_.loop_closure && config.checkpoint.session && !outputs_.session_path.empty())
@@ -253,9 +299,10 @@ int Pipeline::run(RunControl& control) {
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
   // keyframes (and so the map) independent of timing.
-  TrackingThread tracking(
-      {queue, tracker, fusion, publication, outputs_.publisher ? corrections.get() : nullptr},
-      !live, config.checkpoint, checkpoint, stats_, control, fail);
+  TrackingThread tracking({queue, tracker, fusion, publication,
+                           outputs_.publisher || localising ? corrections.get() : nullptr,
+                           localising ? corrections.get() : nullptr},
+                          !live, config.checkpoint, checkpoint, stats_, control, fail);
 
   // Wait: status until the tracking thread has taken every frame, then the rest in turn.
   StatusLine status(stats_, queue, outputs_.status_line, start);
@@ -264,6 +311,7 @@ int Pipeline::run(RunControl& control) {
   tracking.join();
   queue.freeImages();
   if (loop_closer) loop_closer->finish();  // every keyframe searched: final corrections
+  if (localiser) localiser->finish();
   if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());
   fusion.finish();
   stats_.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -284,6 +332,7 @@ int Pipeline::run(RunControl& control) {
     spdlog::error("{}", fatal);
     exit_code = 1;
   }
+  if (localiser) return std::max(exit_code, reportLocalisation(localiser->counts(), stats_));
   // Nothing mapped is a failure; most frames unused is worth saying.
   const bool stopped_on_request = control.stop.load() && fatal.empty();
   exit_code = std::max(

@@ -268,8 +268,8 @@ void syncFolder(const std::string& path) {
   ::close(fd);
 }
 
-// "version: N" of session.yaml, checked before anything else is read.
-void checkVersion(const std::string& path) {
+// "version: N" of session.yaml, checked before anything else is read; returns its created_by.
+std::string checkVersion(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
   bool is_session = false;
@@ -281,7 +281,10 @@ void checkVersion(const std::string& path) {
     if (version != std::to_string(Session::kFormatVersion))
       throw InputError(path + ": session format version " + version +
                        ", this rgbdmap reads version " + std::to_string(Session::kFormatVersion));
-    return;
+    const std::string key = "created_by: ";
+    while (std::getline(in, line))
+      if (line.rfind(key, 0) == 0) return line.substr(key.size());
+    return "";
   }
   throw InputError(path + ": not an rgbdmap session (no 'format: rgbdmap-session' and version)");
 }
@@ -356,8 +359,8 @@ Session readSession(const std::string& path) {
                      ": no session folder there (sessions are written beside the map as "
                      "MAP.session)");
   const auto in = [&path](const char* name) { return path + "/" + name; };
-  checkVersion(in(kSummaryFile));
   Session session;
+  session.created_by = checkVersion(in(kSummaryFile));
   {
     std::ifstream config(in(kConfigFile));
     if (!config) throw InputError(in(kConfigFile) + ": cannot open (" + std::strerror(errno) + ")");

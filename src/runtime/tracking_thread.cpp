@@ -74,6 +74,8 @@ void TrackingThread::track(Frame& frame) {
       else
         stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
     }
+    if (parts_.placement && parts_.placement->snapshot().table->empty())
+      stats_.frames_unplaced.fetch_add(1, std::memory_order_relaxed);
     // The viewer is shown the pose after loop closures, like the written trajectory.
     if (parts_.viewer_corrections)
       frame.pose = parts_.viewer_corrections->snapshot().apply(frame.anchor, frame.pose);

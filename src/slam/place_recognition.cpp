@@ -61,6 +61,13 @@ void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
   entries_[id] = std::move(place);
 }
 
+void PlaceRecognition::restore(int id, std::shared_ptr<const Place> place) {
+  const auto slot = static_cast<std::size_t>(id);
+  std::lock_guard<std::mutex> lock(entries_mutex_);
+  if (entries_.size() <= slot) entries_.resize(slot + 1);
+  entries_[slot] = std::move(place);
+}
+
 std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& candidates,
                                                       Counts& counts) {
   if (entries_.empty() || !entries_.back()) return std::nullopt;
@@ -79,7 +86,7 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
 
   for (const auto& [matches, id] : ranked) {
     ++counts.proposed;
-    Place& earlier = *entries_[static_cast<std::size_t>(id)];
+    const Place& earlier = *entries_[static_cast<std::size_t>(id)];
     int inliers = 0;
     const std::optional<Eigen::Isometry3d> found = features_.locate(earlier.view, &inliers);
     // Only places the camera has really been back to: two views of one wall from a metre apart

@@ -87,6 +87,10 @@ void Relocaliser::ratioMatches(const RelocalisationView& keyframe,
 
 int Relocaliser::similarity(RelocalisationView& keyframe) {
   if (!keyframe.described) describe(keyframe);
+  return similarity(static_cast<const RelocalisationView&>(keyframe));
+}
+
+int Relocaliser::similarity(const RelocalisationView& keyframe) {
   std::vector<cv::DMatch> matches;
   ratioMatches(keyframe, matches);
   return static_cast<int>(matches.size());
@@ -94,6 +98,11 @@ int Relocaliser::similarity(RelocalisationView& keyframe) {
 
 std::optional<Eigen::Isometry3d> Relocaliser::locate(RelocalisationView& keyframe, int* inliers) {
   if (!keyframe.described) describe(keyframe);
+  return locate(static_cast<const RelocalisationView&>(keyframe), inliers);
+}
+
+std::optional<Eigen::Isometry3d> Relocaliser::locate(const RelocalisationView& keyframe,
+                                                     int* inliers) {
   if (keyframe.descriptors.rows < min_inliers_ || current_descriptors_.rows < min_inliers_)
     return std::nullopt;
   std::vector<cv::DMatch> matches;

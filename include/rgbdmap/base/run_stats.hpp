@@ -46,6 +46,8 @@ struct RunStats {
   std::atomic<std::uint64_t> frames_tracked{0};
   std::atomic<std::uint64_t> frames_lost{0};
   std::atomic<std::uint64_t> frames_relocalised{0};
+  // Localising (--localise): frames posed before the saved map was recognised.
+  std::atomic<std::uint64_t> frames_unplaced{0};
   // Keyframes proposed while every fusion slot was busy (live sources): the next frame is
   // proposed instead, nothing is dropped.
   std::atomic<std::uint64_t> keyframes_deferred{0};

@@ -24,7 +24,8 @@ Keys keyframeKeys(KeyframeOptions& o);
 // that could not be handed to fusion (fusion busy on a live camera) is not committed, so the
 // next frame is proposed again instead of the keyframe being lost.
 struct KeyframeSelector {
-  enum class Policy { kInterval, kMotion, kBoth };
+  // kNone: no frame is fused (localisation in a saved map, which stays as it is).
+  enum class Policy { kInterval, kMotion, kBoth, kNone };
 
   KeyframeSelector() : KeyframeSelector(Policy::kInterval, KeyframeOptions{}) {}
   KeyframeSelector(Policy policy, const KeyframeOptions& o)
@@ -42,6 +43,7 @@ struct KeyframeSelector {
   // posed frame always is.
   bool wants(const Eigen::Isometry3d& pose) {
     ++frames_since_keyframe_;
+    if (policy == Policy::kNone) return false;
     if (!last_keyframe_pose_) return true;
     const bool interval_due = frames_since_keyframe_ >= static_cast<std::uint64_t>(every_n);
     const Eigen::Isometry3d delta = last_keyframe_pose_->inverse() * pose;
@@ -54,6 +56,8 @@ struct KeyframeSelector {
         return moved;
       case Policy::kBoth:
         return interval_due || moved;
+      case Policy::kNone:
+        return false;
     }
     return false;
   }

@@ -11,6 +11,8 @@
 
 namespace rgbdmap {
 
+struct Session;
+
 // Requests from outside the pipeline (signal thread, tests). Only atomics: safe from anywhere.
 struct RunControl {
   std::atomic<bool> stop{false};      // SIGINT/SIGTERM: stop capture, drain, final save
@@ -36,7 +38,11 @@ struct PipelineOutputs {
 // after the source ends or a stop is requested, with the final map written.
 class Pipeline {
  public:
-  Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs);
+  // `localise_in`: a saved session to localise in (--localise) instead of mapping: every frame is
+  // posed in the saved map's frame (trajectories, viewer, ROS), nothing is fused and no map is
+  // written (leave outputs.map_path empty); frames posed before the map is recognised are counted.
+  Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs,
+           std::shared_ptr<const Session> localise_in = nullptr);
 
   // Returns the process exit code: 0 on success, 1 when the run stopped on bad input or a failed
   // final write (the map built so far is still saved).
@@ -47,6 +53,7 @@ class Pipeline {
   Config config_;
   std::unique_ptr<FrameSource> source_;
   PipelineOutputs outputs_;
+  std::shared_ptr<const Session> localise_in_;
   RunStats stats_;
 };
 

@@ -33,6 +33,9 @@ class TrackingThread {
     MapPublication& publication;
     // Moves the poses the viewer is shown by the loop closures (null: shown as tracked).
     const PoseCorrections* viewer_corrections;
+    // Localising: frames posed before this has any correction (the saved map not recognised
+    // yet) are counted unplaced (null: not localising).
+    const PoseCorrections* placement = nullptr;
   };
 
   // Starts the thread. `wait_for_fusion`: a keyframe waits for a fusion slot (a lossless replay,

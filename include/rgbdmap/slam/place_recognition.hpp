@@ -51,6 +51,8 @@ class PlaceRecognition {
 
   // Takes in the newest keyframe (its images are let go after this). Call before find().
   void add(const TrackedKeyframe& keyframe);
+  // Takes in a place saved by an earlier run (a session's) as keyframe `id`'s.
+  void restore(int id, std::shared_ptr<const Place> place);
   // The best verified loop from the newest keyframe to one of `candidates` (ids, nearest
   // first), or none.
   std::optional<LoopMeasurement> find(const std::vector<int>& candidates, Counts& counts);
@@ -74,7 +76,7 @@ class PlaceRecognition {
   // By keyframe id; null for a keyframe not described or forgotten. Pointers, so that growing
   // the table never copies the places (tens of MB in a long run).
   // Written on the caller's (loop) thread only, under `entries_mutex_` for places().
-  std::vector<std::shared_ptr<Place>> entries_;
+  std::vector<std::shared_ptr<const Place>> entries_;
   mutable std::mutex entries_mutex_;
 };
 

@@ -37,6 +37,10 @@ class Relocaliser {
   // The motion mapping keyframe-camera points into the current camera, when enough matches
   // agree on one (`inliers`, if given, receives the PnP inlier count).
   std::optional<Eigen::Isometry3d> locate(RelocalisationView& keyframe, int* inliers = nullptr);
+  // The same for a view already described (a place's: shared, never changed).
+  int similarity(const RelocalisationView& keyframe);
+  std::optional<Eigen::Isometry3d> locate(const RelocalisationView& keyframe,
+                                          int* inliers = nullptr);
 
  private:
   void describe(RelocalisationView& view);
