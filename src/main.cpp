@@ -3,8 +3,6 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -50,30 +48,6 @@ bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   return true;
 }
 
-// The session --localise names, read whole (exit 2 naming the file when it cannot be), after the
-// checks that keep the saved map as it is.
-std::shared_ptr<const rgbdmap::Session> openSessionToLocaliseIn(const CommandLine& o) {
-  using namespace rgbdmap;
-  namespace fs = std::filesystem;
-  if (!o.mesh.empty() || !o.grid.empty() || !o.octomap.empty())
-    throw InputError("--localise " + o.localise +
-                     ": nothing is mapped while localising (no --mesh, --grid or --octomap)");
-  std::string saved = o.localise;
-  while (saved.size() > 1 && saved.back() == '/') saved.pop_back();
-  std::error_code ec;
-  if (fs::weakly_canonical(sessionPathOf(o.out), ec) == fs::weakly_canonical(saved, ec))
-    throw InputError("--localise " + o.localise + ": --out " + o.out +
-                     " would write beside the saved map; give the localisation run its own name "
-                     "(e.g. --out localised.pcd: its trajectory is localised_trajectory.txt)");
-  auto session = std::make_shared<const Session>(readSession(o.localise));
-  spdlog::info("localising in {}: {} keyframes, {} places ({})", o.localise,
-               session->graph.keyframes.size(),
-               std::count_if(session->graph.places.begin(), session->graph.places.end(),
-                             [](const auto& p) { return p != nullptr; }),
-               session->created_by);
-  return session;
-}
-
 int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunSignals& signals) {
   using namespace rgbdmap;
   Config config;
@@ -92,7 +66,12 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (!o.grid.empty()) checkOutputFolder(o.grid, "--grid");
   if (!o.octomap.empty()) checkOutputFolder(o.octomap, "--octomap");
   std::shared_ptr<const Session> localise_in;
-  if (!o.localise.empty()) localise_in = openSessionToLocaliseIn(o);
+  if (!o.localise.empty()) {
+    if (!o.mesh.empty() || !o.grid.empty() || !o.octomap.empty())
+      throw InputError("--localise " + o.localise +
+                       ": nothing is mapped while localising (no --mesh, --grid or --octomap)");
+    localise_in = openSessionToLocaliseIn(o.localise, o.out, "--localise");
+  }
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string& s : o.sets) {
@@ -114,15 +93,9 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
     throw InputError("--localise " + o.localise + ": needs the camera's odometry (pose.source=" +
                      config.pose.source + ", tracking.method=" + config.tracking.method +
                      "); use --set pose.source=odometry");
-  PipelineOutputs outputs = outputsBeside(o.out, o.mesh);
+  PipelineOutputs outputs = localise_in ? localisationOutputs(o.out) : outputsBeside(o.out, o.mesh);
   outputs.grid_path = o.grid;
   outputs.octomap_path = o.octomap;
-  if (localise_in) {
-    // Nothing is mapped: the run writes where it was, every frame in the saved map's frame.
-    outputs.map_path.clear();
-    outputs.trajectory_path.clear();
-    outputs.session_path.clear();
-  }
   outputs.status_line = !o.quiet;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
 

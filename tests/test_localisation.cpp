@@ -66,6 +66,10 @@ Localised localise(const std::string& sequence, const std::string& session, cons
                            ".json" + extra,
                        &run.log);
   run.stats = test::readFile(out + ".json");
+  // The statistics are JSON a reader takes (a separator once went missing between two entries).
+  EXPECT_EQ(
+      test::run("python3 -c 'import json, sys; json.load(open(sys.argv[1]))' " + out + ".json"), 0)
+      << run.stats;
   if (fs::exists(out + "_trajectory.txt"))
     run.trajectory = Trajectory::load(out + "_trajectory.txt");
   return run;
@@ -191,7 +195,7 @@ TEST(Localisation, RefusesToWriteBesideTheSavedMapOrToMap) {
                           dir + "/map.session/ --out " + dir + "/map.pcd --no-render --viewer none",
                       &output),
             2);
-  EXPECT_NE(output.find("would write beside the saved map"), std::string::npos) << output;
+  EXPECT_NE(output.find("would be written beside the saved map"), std::string::npos) << output;
   EXPECT_EQ(digest(dir + "/map_trajectory.txt"), before);
   EXPECT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kXyz) + " --localise " +
                           dir + "/map.session --out " + dir +

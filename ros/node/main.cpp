@@ -10,6 +10,7 @@
 #include <fstream>
 #include <thread>
 
+#include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
@@ -20,6 +21,8 @@
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/pose_source.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/tracking/pose_provider.hpp"
 
 namespace {
 
@@ -41,7 +44,9 @@ bool writeMapNow(RunControl& control, const RunStats& stats, const std::string& 
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   response.success = stats.checkpoints_written.load() > before_written;
   if (response.success)
-    response.message = path + " (" + std::to_string(stats.map_points.load()) + " points)";
+    response.message = stats.localising
+                           ? path
+                           : path + " (" + std::to_string(stats.map_points.load()) + " points)";
   else if (control.stop.load())
     response.message = "stopping: the final save writes " + path;
   else
@@ -72,6 +77,12 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.loadPreset(settings.config);
   applyPrivateParams(pnh, config);
   checkOutputFolder(settings.out, "~out");
+  // Read before waiting for the camera: a session that cannot be used stops the node at once.
+  const std::shared_ptr<const Session> localise_in =
+      settings.localise.empty()
+          ? nullptr
+          : openSessionToLocaliseIn(settings.localise, settings.out, pnh.resolveName("localise"));
+  if (localise_in && config.pose.source == "auto") config.pose.source = "odometry";
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.
   ros::AsyncSpinner image_spinner(1);
@@ -86,7 +97,12 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.pose.source = resolvePoseSource(
       config.pose.source, topics.providesPoses(),
       "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
-  PipelineOutputs outputs = outputsBeside(settings.out);
+  if (localise_in && !tracksKeyframes(config.pose, config.tracking))
+    throw InputError(pnh.resolveName("localise") +
+                     ": localising needs the camera's odometry (pose/source=odometry, "
+                     "tracking/method=dense)");
+  PipelineOutputs outputs =
+      localise_in ? localisationOutputs(settings.out) : outputsBeside(settings.out);
   outputs.grid_path = settings.grid;
   outputs.octomap_path = settings.octomap;
   if (!signals.runStarts({temporaryFiles(outputs)})) {
@@ -111,7 +127,7 @@ int runNode(RunControl& control, RunSignals& signals) {
   outputs.status_line = false;
   outputs.publisher = &publisher;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
-  Pipeline pipeline(config, std::move(source), outputs);
+  Pipeline pipeline(config, std::move(source), outputs, localise_in);
 
   // Services on a queue and thread of their own: a call waits for its checkpoint without
   // holding up the image callbacks.
@@ -119,7 +135,9 @@ int runNode(RunControl& control, RunSignals& signals) {
   ros::NodeHandle service_nh("~");
   service_nh.setCallbackQueue(&service_queue);
   const auto handler = [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-    return writeMapNow(control, pipeline.stats(), settings.out, response);
+    // Localising, a save writes the trajectory alone.
+    return writeMapNow(control, pipeline.stats(),
+                       localise_in ? outputs.frame_trajectory_path : settings.out, response);
   };
   ros::ServiceServer save_map =
       service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
@@ -136,10 +154,15 @@ int runNode(RunControl& control, RunSignals& signals) {
           });
   ros::AsyncSpinner service_spinner(1, &service_queue);
   service_spinner.start();
-  spdlog::info("mapping: publishing {}, {} and {}, TF {} -> {}; services {}, {} and {}",
-               pnh.resolveName("map"), pnh.resolveName("grid"), pnh.resolveName("pose"),
-               publish.map_frame, publish.camera_frame, save_map.getService(),
-               snapshot.getService(), save_octomap.getService());
+  if (localise_in)
+    spdlog::info("localising in {}: publishing {} and TF {} -> {} in the saved map's frame",
+                 settings.localise, pnh.resolveName("pose"), publish.map_frame,
+                 publish.camera_frame);
+  else
+    spdlog::info("mapping: publishing {}, {} and {}, TF {} -> {}; services {}, {} and {}",
+                 pnh.resolveName("map"), pnh.resolveName("grid"), pnh.resolveName("pose"),
+                 publish.map_frame, publish.camera_frame, save_map.getService(),
+                 snapshot.getService(), save_octomap.getService());
 
   const int code = pipeline.run(control);
   topics.shutdown();

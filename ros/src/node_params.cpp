@@ -62,6 +62,13 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
   s.grid_interval = numberParam(nh, "grid_interval", "5");
   s.grid = stringParam(nh, "grid", "");
   s.octomap = stringParam(nh, "octomap", stem(s.out) + ".bt");
+  s.localise = stringParam(nh, "localise", "");
+  if (!s.localise.empty()) {
+    if (nh.hasParam("grid") || nh.hasParam("octomap"))
+      throw InputError("parameter " + nh.resolveName("localise") +
+                       ": nothing is mapped while localising (no ~grid or ~octomap)");
+    s.octomap.clear();
+  }
   return s;
 }
 
@@ -69,9 +76,9 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   // A misspelt parameter would otherwise be ignored in silence, as an unknown --set key is not.
   std::vector<std::string> names;
   const std::string prefix = nh.getNamespace() + "/";
-  const std::set<std::string> settings = {"config",        "out",          "stats",
-                                          "map_frame",     "camera_frame", "map_interval",
-                                          "grid_interval", "grid",         "octomap"};
+  const std::set<std::string> settings = {
+      "config",       "out",           "stats", "map_frame", "camera_frame",
+      "map_interval", "grid_interval", "grid",  "octomap",   "localise"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
@@ -82,9 +89,10 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
       for (char& c : key)
         if (c == '/') c = '.';
       if (!keys.count(key))
-        throw InputError("parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
-                         "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
-                         "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap)");
+        throw InputError(
+            "parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
+            "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
+            "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, ~localise)");
     }
   }
   for (const Key& key : config.keys()) {

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <mutex>
 
+#include "rgbdmap/capture/trajectory.hpp"
 #include "ros_test_support.hpp"
 
 namespace rgbdmap::test {
@@ -246,6 +247,60 @@ TEST_F(RosNode, TwoRobotsAndAConsumerOnOneMaster) {
   // Each node wrote its final map.
   EXPECT_GE(loadMap(dir_ + "/robot1/map.pcd").size(), kMapPoints);
   EXPECT_GE(loadMap(dir_ + "/robot2/map.pcd").size(), kMapPoints / 10);
+}
+
+TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
+  // The saved map: fr1/rpy mapped by the command line. The node localises fr1/xyz's bag in it;
+  // so does the command line, from the folder, for comparison.
+  std::string output;
+  const std::string cli = binary() + " --no-render --viewer none --source tum:";
+  ASSERT_EQ(
+      run(cli + tumDir(kRpy) + " --out " + dir_ + "/map.pcd --set pose.source=odometry", &output),
+      0)
+      << output;
+  ASSERT_EQ(
+      run(cli + tumDir(kXyz) + " --localise " + dir_ + "/map.session --out " + dir_ + "/cli.pcd",
+          &output),
+      0)
+      << output;
+  const Trajectory by_cli = Trajectory::load(dir_ + "/cli_trajectory.txt");
+  const std::string map_before = readFile(dir_ + "/map.pcd");
+
+  std::mutex mutex;
+  geometry_msgs::PoseStamped last;
+  ros::Subscriber poses = nh_->subscribe<geometry_msgs::PoseStamped>(
+      "/rgbdmap/pose", 100, [&](const geometry_msgs::PoseStamped::ConstPtr& p) {
+        std::lock_guard<std::mutex> lock(mutex);
+        last = *p;
+      });
+  const std::string node_log = dir_ + "/node.log";
+  Process node({nodeBinary(), "_out:=" + dir_ + "/localised.pcd", "_stats:=" + dir_ + "/stats.json",
+                "_localise:=" + dir_ + "/map.session"},
+               node_log);
+  auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
+  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+  ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
+  node.signal(SIGINT);
+  ASSERT_EQ(node.wait(60), 0) << readFile(node_log);
+  const std::string log = readFile(node_log);
+  EXPECT_NE(log.find("localising in " + dir_ + "/map.session"), std::string::npos) << log;
+  // Nothing mapped, the saved map as it was.
+  EXPECT_FALSE(std::filesystem::exists(dir_ + "/localised.pcd"));
+  EXPECT_EQ(readFile(dir_ + "/map.pcd"), map_before);
+  const std::string stats = readFile(dir_ + "/stats.json");
+  expectEveryFrameAccountedFor(dir_ + "/stats.json", 32);
+  // A sanitizer build drops most frames at the recorded rate: too few to be sure of a placement.
+  if (!kRealTime) return;
+  EXPECT_NE(log.find("localisation: placed in the saved map"), std::string::npos) << log;
+  EXPECT_GT(jsonNumber(stats, "keyframes_placed"), 0) << stats;
+  // The last pose published is in the saved map's frame: where the command line put that frame.
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(last.header.frame_id, "map");
+  const auto expected = by_cli.interpolate(last.header.stamp.toSec());
+  ASSERT_TRUE(expected) << last.header.stamp.toSec();
+  const Eigen::Vector3d published(last.pose.position.x, last.pose.position.y, last.pose.position.z);
+  EXPECT_LT((published - expected->translation()).norm(), 0.03)
+      << published.transpose() << " vs " << expected->translation().transpose();
 }
 
 TEST_F(RosNode, BadParameterIsOneClearMessage) {

@@ -62,6 +62,9 @@ std::string RunStats::toJson() const {
       << "  \"frames_lost\": " << frames_lost << ",\n"
       << "  \"frames_relocalised\": " << frames_relocalised << ",\n"
       << "  \"frames_unplaced\": " << frames_unplaced << ",\n"
+      << "  \"localising\": " << (localising ? "true" : "false") << ",\n"
+      << "  \"keyframes_looked_for\": " << keyframes_looked_for << ",\n"
+      << "  \"keyframes_placed\": " << keyframes_placed << ",\n"
       << "  \"keyframes_deferred\": " << keyframes_deferred << ",\n"
       << "  \"loop_closure\": " << (loop_closure ? "true" : "false") << ",\n"
       << "  \"loop_candidates\": " << loop_candidates << ",\n"
@@ -92,8 +95,8 @@ std::string RunStats::toJson() const {
   latency("optimise", optimise_latency, false);
   latency("refuse", refuse_latency, false);
   latency("mesh_extract", mesh_extract_latency, false);
-  latency("mesh_write", mesh_write_latency, true);
-  latency("grid_write", grid_write_latency, true);
+  latency("mesh_write", mesh_write_latency, false);
+  latency("grid_write", grid_write_latency, false);
   latency("octomap_write", octomap_write_latency, true);
   out << "  }\n}\n";
   return out.str();

@@ -36,6 +36,14 @@ PipelineOutputs outputsBeside(const std::string& map_path, const std::string& me
   return outputs;
 }
 
+PipelineOutputs localisationOutputs(const std::string& map_path) {
+  PipelineOutputs outputs = outputsBeside(map_path);
+  outputs.map_path.clear();
+  outputs.trajectory_path.clear();  // no keyframes are fused
+  outputs.session_path.clear();
+  return outputs;
+}
+
 std::string sessionPathOf(const std::string& map_path) { return stem(map_path) + ".session"; }
 
 std::string picturePathOf(const std::string& map_path) { return stem(map_path) + ".png"; }

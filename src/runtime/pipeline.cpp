@@ -221,6 +221,7 @@ int Pipeline::run(RunControl& control) {
   const bool localising = localise_in_ != nullptr && tracksKeyframes(config.pose, config.tracking);
   stats_.loop_closure =
       !localising && config.loop.enabled && tracksKeyframes(config.pose, config.tracking);
+  stats_.localising = localising;
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
   std::unique_ptr<Localiser> localiser;

@@ -1,6 +1,7 @@
 #include "rgbdmap/runtime/session_file.hpp"
 
 #include <fcntl.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -371,6 +372,27 @@ Session readSession(const std::string& path) {
   readGraph(openRecord(in(kGraphFile), kGraphKind, Session::kFormatVersion), session);
   readPlaces(openRecord(in(kPlacesFile), kPlacesKind, Session::kFormatVersion), session);
   readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
+  return session;
+}
+
+std::shared_ptr<const Session> openSessionToLocaliseIn(const std::string& path,
+                                                       const std::string& map_path,
+                                                       const std::string& option) {
+  std::string saved = path;
+  while (saved.size() > 1 && saved.back() == '/') saved.pop_back();
+  std::error_code ec;
+  if (fs::weakly_canonical(sessionPathOf(map_path), ec) == fs::weakly_canonical(saved, ec))
+    throw InputError(option + " " + path + ": the run's files (" + map_path +
+                     ") would be written beside the saved map's; give it its own name (e.g. "
+                     "localised.pcd: its trajectory is localised_trajectory.txt)");
+  // The kept keyframes' images are for fusion: a localisation keeps only the graph and places.
+  Session read = readSession(path);
+  read.keyframes = {};
+  auto session = std::make_shared<const Session>(std::move(read));
+  std::size_t places = 0;
+  for (const auto& place : session->graph.places) places += place ? 1 : 0;
+  spdlog::info("localising in {}: {} keyframes, {} places (made by {})", path,
+               session->graph.keyframes.size(), places, session->created_by);
   return session;
 }
 

@@ -19,9 +19,16 @@ double megabytes(const std::atomic<std::uint64_t>& bytes) {
 }
 
 // " | loops N, places X MB" while loop closure runs (the status line says when a loop closed).
+// or " | placed N of M keyframes" while localising in a saved map.
 std::string loops(const RunStats& s) {
-  if (!s.loop_closure) return "";
   char text[64];
+  if (s.localising) {
+    std::snprintf(text, sizeof text, " | placed %llu of %llu keyframes",
+                  static_cast<unsigned long long>(s.keyframes_placed.load()),
+                  static_cast<unsigned long long>(s.keyframes_looked_for.load()));
+    return text;
+  }
+  if (!s.loop_closure) return "";
   std::snprintf(text, sizeof text, " | loops %llu, places %.1f MB",
                 static_cast<unsigned long long>(s.loops_accepted.load()), megabytes(s.place_bytes));
   return text;

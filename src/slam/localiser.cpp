@@ -122,6 +122,7 @@ void Localiser::process(TrackedKeyframe& keyframe) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++counts_.searched;
   }
+  stats_.keyframes_looked_for.fetch_add(1, std::memory_order_relaxed);
 
   if (found) {
     Placement placement;
@@ -193,6 +194,7 @@ void Localiser::accept(const Placement& placement) {
     table_[placement.keyframe] = placement.odometry_in_map;
   }
   corrections_.publish(table_);
+  stats_.keyframes_placed.fetch_add(1, std::memory_order_relaxed);
   std::lock_guard<std::mutex> lock(mutex_);
   ++counts_.placed;
   if (first) {

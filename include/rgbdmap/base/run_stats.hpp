@@ -46,8 +46,11 @@ struct RunStats {
   std::atomic<std::uint64_t> frames_tracked{0};
   std::atomic<std::uint64_t> frames_lost{0};
   std::atomic<std::uint64_t> frames_relocalised{0};
-  // Localising (--localise): frames posed before the saved map was recognised.
+  // Localising (--localise): frames posed before the saved map was recognised, keyframes looked
+  // for among the saved places and placements taken.
   std::atomic<std::uint64_t> frames_unplaced{0};
+  std::atomic<std::uint64_t> keyframes_looked_for{0};
+  std::atomic<std::uint64_t> keyframes_placed{0};
   // Keyframes proposed while every fusion slot was busy (live sources): the next frame is
   // proposed instead, nothing is dropped.
   std::atomic<std::uint64_t> keyframes_deferred{0};
@@ -66,6 +69,7 @@ struct RunStats {
   std::atomic<std::uint64_t> map_refusions{0};
   std::atomic<std::uint64_t> keyframes_refused{0};
   bool loop_closure = false;  // the run closes loops (set before the threads start)
+  bool localising = false;    // the run localises in a saved map (set before the threads start)
 
   LatencyHistogram read_latency;       // capture: read + decode + convert
   LatencyHistogram filter_latency;     // mapping: depth filtering

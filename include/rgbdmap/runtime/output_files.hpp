@@ -24,6 +24,9 @@ std::string spoolFileOf(const std::string& trajectory_path);
 // The files of a run whose map is `map_path`: the map, and beside it MAP_keyframes.txt,
 // MAP_trajectory.txt, MAP.yaml and MAP.session (docs/usage.md), with `mesh_path` ("" = no mesh).
 PipelineOutputs outputsBeside(const std::string& map_path, const std::string& mesh_path = "");
+// The files of a run that localises in a saved map (--localise): only the trajectory of every
+// frame and the effective configuration, named after `map_path` (which is not written).
+PipelineOutputs localisationOutputs(const std::string& map_path);
 // MAP.session, the session folder saved beside map MAP.pcd (session_file.hpp).
 std::string sessionPathOf(const std::string& map_path);
 // MAP.png, the picture of the map the CLI renders after a run.

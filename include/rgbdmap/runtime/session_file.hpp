@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,13 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
 // format version, truncated or corrupt.
 Session readSession(const std::string& path);
 SessionSummary summarise(const Session& session, const std::string& path);
+
+// The session a run localises in (--localise, ~localise: `option`), read whole, after checking
+// that the run's own files, named after `map_path`, would not land beside the saved map's.
+// Throws InputError naming the option and the path.
+std::shared_ptr<const Session> openSessionToLocaliseIn(const std::string& path,
+                                                       const std::string& map_path,
+                                                       const std::string& option);
 
 // The corrections the session's graph makes to its keyframes' odometry (PoseCorrections'
 // table: optimised pose times the inverse of the odometry pose, by keyframe id).

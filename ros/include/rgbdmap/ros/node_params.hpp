@@ -19,6 +19,9 @@ struct NodeSettings {
   double grid_interval = 5;  // ~grid_interval: seconds between published grids (< 0: no ~grid)
   std::string grid;          // ~grid: the grid's PGM (and YAML) written with every save ("" = none)
   std::string octomap;       // ~octomap: the OctoMap written with every save and ~save_octomap
+  // ~localise: a saved session (MAP.session) to localise in instead of mapping: poses and TF in
+  // its map's frame, nothing mapped ("" = map).
+  std::string localise;
 };
 
 NodeSettings readNodeSettings(const ros::NodeHandle& private_nh);
