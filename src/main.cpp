@@ -178,6 +178,7 @@ int main(int argc, char** argv) {
   rgbdmap::addEvaluateCommand(app, selected);
   rgbdmap::addViewCommand(app, selected);
   rgbdmap::addSessionCommand(app, selected);
+  rgbdmap::addMergeCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

@@ -178,6 +178,22 @@ std::string copySequence(const std::string& source, const std::string& target) {
   return target;
 }
 
+std::string sequenceTail(const std::string& source, std::size_t first, const std::string& target) {
+  namespace fs = std::filesystem;
+  fs::create_directories(target);
+  for (const char* list : {"rgb.txt", "depth.txt"}) {
+    std::ifstream in(source + "/" + list);
+    std::ofstream out(target + "/" + list);
+    std::size_t frame = 0;
+    for (std::string line; std::getline(in, line);)
+      if (line.empty() || line[0] == '#' || frame++ >= first) out << line << "\n";
+  }
+  fs::copy_file(source + "/groundtruth.txt", target + "/groundtruth.txt");
+  for (const char* folder : {"rgb", "depth"})
+    fs::create_directory_symlink(source + "/" + folder, target + "/" + folder);
+  return target;
+}
+
 StalledWrite::StalledWrite(const std::string& path) {
   EXPECT_EQ(::mkfifo(path.c_str(), 0644), 0) << path << ": " << std::strerror(errno);
   fd_ = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);

@@ -56,6 +56,9 @@ double jsonNumber(const std::string& json, const std::string& key);
 std::string sharedSynthetic(const std::string& name, const std::string& synth_options);
 // Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
 std::string copySequence(const std::string& source, const std::string& target);
+// A copy of a TUM-layout sequence holding only its frames from `first` on (the lists cut, the
+// ground truth whole, the image folders linked).
+std::string sequenceTail(const std::string& source, std::size_t first, const std::string& target);
 
 // A write that cannot finish, as on a stalled disk: a FIFO at the name a writer will write (a
 // temporary file's), read by nobody. The writer's open succeeds at once (this object holds the

@@ -17,5 +17,6 @@ void addSynthCommand(CLI::App& app, Command& selected);      // tools/synth.cpp
 void addEvaluateCommand(CLI::App& app, Command& selected);   // tools/evaluate.cpp
 void addViewCommand(CLI::App& app, Command& selected);       // tools/view.cpp
 void addSessionCommand(CLI::App& app, Command& selected);    // tools/session.cpp
+void addMergeCommand(CLI::App& app, Command& selected);      // tools/merge.cpp
 
 }  // namespace rgbdmap

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+
+namespace rgbdmap {
+
+// Joins saved sessions into one, in the first one's frame (`rgbdmap merge`). A session is placed
+// when enough of its kept keyframes are found among the places of the sessions placed so far
+// (loop closure's verification: ORB, PnP, dense alignment) and agree on where its frame lies;
+// then one pose graph is optimised over all of them: the placed sessions' keyframes held, the
+// new one's free, its odometry and loop edges kept, and a loop edge for each agreeing place.
+// Sessions are tried again until none more can be placed, so a session linked only through
+// another one joins too. A session that shares no place with the others is left out.
+class SessionMerger {
+ public:
+  // Two placements agree on a session's frame within these (its own map's residual errors
+  // and the placements' own).
+  struct Options {
+    int min_agreeing = 2;             // placements that agree, for a session to be placed
+    double agree_translation = 0.05;  // m
+    double agree_rotation = 0.05;     // rad
+    std::size_t max_queries = 200;    // kept keyframes looked for per session and attempt
+  };
+
+  struct Placement {
+    bool placed = false;
+    Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  // its frame in the first's
+    int links = 0;       // agreeing places it was placed by
+    int linked_to = -1;  // the session (index) most of them belong to
+  };
+
+  // `settings`: the first session's effective configuration (tracking, loop and filter keys).
+  SessionMerger(const Config& settings, Options options);
+  explicit SessionMerger(const Config& settings) : SessionMerger(settings, Options{}) {}
+
+  // The merged session (kept keyframes, places and graph of every placed session, anchors and
+  // ids renumbered) and where each input was placed.
+  Session merge(const std::vector<Session>& sessions, std::vector<Placement>& placements) const;
+
+ private:
+  struct Match;
+  // The session's kept keyframes found among the merged places, each with the session's frame
+  // it implies.
+  std::vector<Match> findMatches(const Session& merged, const Session& session) const;
+  std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
+  void append(Session& merged, std::vector<int>& owner, int index, const Session& session,
+              const std::vector<Match>& links) const;
+
+  Config settings_;
+  Options options_;
+};
+
+}  // namespace rgbdmap

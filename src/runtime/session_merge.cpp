@@ -1,0 +1,228 @@
+#include "rgbdmap/runtime/session_merge.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <map>
+
+#include "rgbdmap/mapping/keyframe_store.hpp"
+#include "rgbdmap/slam/place_recognition.hpp"
+#include "rgbdmap/slam/pose_graph.hpp"
+
+namespace rgbdmap {
+namespace {
+
+double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+
+// A kept keyframe's graph keyframe: its anchor, or the nearest one the graph has (a keyframe
+// fused before the loop closer took its anchor in shares the newest correction; one with no
+// anchor was fused as tracked, which is keyframe 0's frame).
+int nodeOf(const KeyframeStore::Entry& entry, std::size_t keyframes) {
+  if (entry.anchor < 0 || keyframes == 0) return 0;
+  return static_cast<int>(
+      std::min<std::int64_t>(entry.anchor, static_cast<std::int64_t>(keyframes) - 1));
+}
+
+}  // namespace
+
+struct SessionMerger::Match {
+  int target = 0;  // the merged keyframe whose place it was found at
+  int node = 0;    // the session's keyframe the kept keyframe is anchored to
+  Eigen::Isometry3d measurement = Eigen::Isometry3d::Identity();  // X_target^-1 * X_node
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  // the session's frame, merged
+  int inliers = 0;
+};
+
+SessionMerger::SessionMerger(const Config& settings, Options options)
+    : settings_(settings), options_(options) {}
+
+std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merged,
+                                                             const Session& session) const {
+  PlaceRecognition recognition(session.camera, settings_.tracking, settings_.loop,
+                               settings_.filter.min_depth, settings_.filter.max_depth);
+  std::vector<int> candidates;
+  for (std::size_t id = 0; id < merged.graph.places.size(); ++id) {
+    if (!merged.graph.places[id]) continue;
+    recognition.restore(static_cast<int>(id), merged.graph.places[id]);
+    candidates.push_back(static_cast<int>(id));
+  }
+  std::vector<Match> matches;
+  if (candidates.empty() || session.graph.keyframes.empty()) return matches;
+  const auto slot = static_cast<std::uint64_t>(merged.graph.keyframes.size());
+  const PoseCorrections::Table corrections = correctionsOf(session);
+  const std::size_t stride = std::max<std::size_t>(
+      1, session.keyframes.size() / std::max<std::size_t>(1, options_.max_queries));
+  KeyframeStore decoder(0);
+  Frame frame;
+  for (std::size_t i = 0; i < session.keyframes.size(); i += stride) {
+    const KeyframeStore::Entry& entry = session.keyframes[i];
+    decoder.decode(entry, frame);
+    TrackedKeyframe query;
+    query.id = slot;
+    query.timestamp = entry.timestamp;
+    query.color = frame.color;
+    query.depth = frame.depth;
+    recognition.add(query);
+    PlaceRecognition::Counts counts;
+    const std::optional<LoopMeasurement> found = recognition.find(candidates, counts);
+    recognition.forget(static_cast<int>(slot));
+    if (!found) continue;
+    Match m;
+    m.node = nodeOf(entry, session.graph.keyframes.size());
+    // Where the kept keyframe is in the session's frame, and relative to its graph keyframe.
+    const Eigen::Isometry3d in_session =
+        entry.anchor < 0 ? entry.pose : corrections[static_cast<std::size_t>(m.node)] * entry.pose;
+    const Eigen::Isometry3d in_node =
+        session.graph.keyframes[static_cast<std::size_t>(m.node)].pose.inverse() * in_session;
+    m.target = found->earlier;
+    const Eigen::Isometry3d in_merged =
+        merged.graph.keyframes[static_cast<std::size_t>(m.target)].pose * found->later_in_earlier;
+    m.transform = in_merged * in_session.inverse();
+    m.transform.linear() = Eigen::Quaterniond(m.transform.linear()).normalized().toRotationMatrix();
+    m.measurement = found->later_in_earlier * in_node.inverse();
+    m.information = found->information;
+    m.inliers = found->inliers;
+    matches.push_back(m);
+  }
+  return matches;
+}
+
+std::optional<std::vector<SessionMerger::Match>> SessionMerger::agreeing(
+    const std::vector<Match>& matches) const {
+  // The largest group of placements that agree with one of them on the session's frame.
+  std::vector<Match> best;
+  for (const Match& centre : matches) {
+    std::vector<Match> group;
+    for (const Match& m : matches) {
+      const Eigen::Isometry3d change = centre.transform.inverse() * m.transform;
+      if (change.translation().norm() <= options_.agree_translation &&
+          angle(change) <= options_.agree_rotation)
+        group.push_back(m);
+    }
+    if (group.size() > best.size()) best = std::move(group);
+  }
+  if (static_cast<int>(best.size()) < options_.min_agreeing) return std::nullopt;
+  return best;
+}
+
+void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
+                           const Session& session, const std::vector<Match>& links) const {
+  const std::size_t offset = merged.graph.keyframes.size();
+  const std::size_t count = session.graph.keyframes.size();
+  const auto id = [offset](int node) { return static_cast<int>(offset) + node; };
+  std::vector<Eigen::Isometry3d> poses;
+  if (links.empty()) {  // the first session: the merged frame is its own
+    for (const auto& k : session.graph.keyframes) poses.push_back(k.pose);
+  } else {
+    // One graph: the placed keyframes held, this session's free, started where the
+    // best-supported placement puts them.
+    const Match& start =
+        *std::max_element(links.begin(), links.end(),
+                          [](const Match& a, const Match& b) { return a.inliers < b.inliers; });
+    PoseGraph graph;
+    for (const auto& k : merged.graph.keyframes) graph.addNode(k.pose);
+    for (const auto& k : session.graph.keyframes) graph.addNode(start.transform * k.pose);
+    for (PoseGraph::Edge e : session.graph.edges) {
+      e.from = id(e.from);
+      e.to = id(e.to);
+      graph.addEdge(e);
+    }
+    for (const Match& m : links) {
+      PoseGraph::Edge e;
+      e.from = m.target;
+      e.to = id(m.node);
+      e.measurement = m.measurement;
+      e.sqrt_information = PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels);
+      e.loop = true;
+      graph.addEdge(e);
+    }
+    graph.optimise(100, static_cast<int>(offset));
+    for (std::size_t i = 0; i < count; ++i) poses.push_back(graph.pose(id(static_cast<int>(i))));
+  }
+
+  for (std::size_t i = 0; i < count; ++i)
+    merged.graph.keyframes.push_back(
+        {session.graph.keyframes[i].timestamp, session.graph.keyframes[i].odometry, poses[i]});
+  for (PoseGraph::Edge e : session.graph.edges) {
+    e.from = id(e.from);
+    e.to = id(e.to);
+    merged.graph.edges.push_back(e);
+  }
+  for (const Match& m : links) {
+    PoseGraph::Edge e;
+    e.from = m.target;
+    e.to = id(m.node);
+    e.measurement = m.measurement;
+    e.sqrt_information = PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels);
+    e.loop = true;
+    merged.graph.edges.push_back(e);
+  }
+  merged.graph.places.resize(offset);
+  for (std::size_t i = 0; i < count; ++i)
+    merged.graph.places.push_back(i < session.graph.places.size() ? session.graph.places[i]
+                                                                  : nullptr);
+  for (KeyframeStore::Entry entry : session.keyframes) {
+    // Anchored to a keyframe of the merged graph: its correction takes it into the merged frame.
+    const int node = nodeOf(entry, count);
+    if (entry.anchor < 0)  // fused as tracked: in keyframe 0's corrected frame, as its odometry
+      entry.pose = session.graph.keyframes.front().odometry *
+                   session.graph.keyframes.front().pose.inverse() * entry.pose;
+    entry.anchor = id(node);
+    merged.keyframes.push_back(std::move(entry));
+  }
+  owner.insert(owner.end(), count, index);
+}
+
+Session SessionMerger::merge(const std::vector<Session>& sessions,
+                             std::vector<Placement>& placements) const {
+  placements.assign(sessions.size(), Placement{});
+  Session merged;
+  if (sessions.empty()) return merged;
+  merged.created_by = sessions.front().created_by;
+  merged.camera = sessions.front().camera;
+  merged.configuration = sessions.front().configuration;
+  std::vector<int> owner;  // the session each merged keyframe came from
+  append(merged, owner, 0, sessions.front(), {});
+  placements[0].placed = true;
+
+  // Until a pass places no session more: one placed now may link another tried before it.
+  for (bool progress = true; progress;) {
+    progress = false;
+    for (std::size_t i = 1; i < sessions.size(); ++i) {
+      if (placements[i].placed) continue;
+      const std::vector<Match> matches = findMatches(merged, sessions[i]);
+      const std::optional<std::vector<Match>> links = agreeing(matches);
+      spdlog::debug("merge: session {}: {} places found, {} agreeing", i, matches.size(),
+                    links ? links->size() : 0);
+      if (!links) continue;
+      std::map<int, int> by_owner;
+      for (const Match& m : *links) ++by_owner[owner[static_cast<std::size_t>(m.target)]];
+      const std::size_t offset = merged.graph.keyframes.size();
+      append(merged, owner, static_cast<int>(i), sessions[i], *links);
+      // The frame the optimised graph settled on: the session's keyframes, fitted rigidly.
+      const std::size_t count = sessions[i].graph.keyframes.size();
+      Eigen::Matrix3Xd before(3, count), after(3, count);
+      for (std::size_t k = 0; k < count; ++k) {
+        before.col(static_cast<Eigen::Index>(k)) =
+            sessions[i].graph.keyframes[k].pose.translation();
+        after.col(static_cast<Eigen::Index>(k)) =
+            merged.graph.keyframes[offset + k].pose.translation();
+      }
+      Placement& p = placements[i];
+      p.placed = true;
+      p.links = static_cast<int>(links->size());
+      p.linked_to =
+          std::max_element(by_owner.begin(), by_owner.end(), [](const auto& a, const auto& b) {
+            return a.second < b.second;
+          })->first;
+      p.transform = links->front().transform;
+      if (count >= 3) p.transform.matrix() = Eigen::umeyama(before, after, false);
+      progress = true;
+    }
+  }
+  return merged;
+}
+
+}  // namespace rgbdmap

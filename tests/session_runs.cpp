@@ -1,0 +1,90 @@
+#include "session_runs.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "rgbdmap/runtime/output_files.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap::test {
+
+namespace fs = std::filesystem;
+
+void mapTo(const std::string& sequence, const std::string& map) {
+  std::string output;
+  ASSERT_EQ(run(binary() + " --source tum:" + sequence + " --out " + map +
+                    " --no-render --viewer none --set pose.source=odometry",
+                &output),
+            0)
+      << output;
+  ASSERT_TRUE(fs::is_directory(sessionPathOf(map))) << output;
+}
+
+Localised localise(const std::string& sequence, const std::string& session,
+                   const std::string& out) {
+  Localised result;
+  result.code = run(binary() + " --source tum:" + sequence + " --localise " + session + " --out " +
+                        out + ".pcd --no-render --viewer none --stats " + out + ".json",
+                    &result.log);
+  result.stats = readFile(out + ".json");
+  // The statistics are JSON a reader takes (a separator once went missing between two entries).
+  EXPECT_EQ(run("python3 -c 'import json, sys; json.load(open(sys.argv[1]))' " + out + ".json"), 0)
+      << result.stats;
+  if (fs::exists(out + "_trajectory.txt"))
+    result.trajectory = Trajectory::load(out + "_trajectory.txt");
+  return result;
+}
+
+std::string digest(const std::string& path) {
+  if (!fs::is_directory(path)) return readFile(path);
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(path)) names.push_back(entry.path().string());
+  std::sort(names.begin(), names.end());
+  std::string all;
+  for (const std::string& name : names) all += name + "\n" + readFile(name);
+  return all;
+}
+
+Trajectory merged(const Trajectory& a, const Trajectory& b) {
+  std::vector<StampedPose> poses = a.poses();
+  poses.insert(poses.end(), b.poses().begin(), b.poses().end());
+  std::sort(poses.begin(), poses.end(),
+            [](const StampedPose& x, const StampedPose& y) { return x.timestamp < y.timestamp; });
+  return Trajectory(std::move(poses));
+}
+
+std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms,
+                                                   const std::string& session) {
+  std::ifstream in(transforms);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    std::string name;
+    double t[3], q[4];
+    if (!(fields >> name) || name != session) continue;
+    if (!(fields >> t[0] >> t[1] >> t[2] >> q[0] >> q[1] >> q[2] >> q[3])) return std::nullopt;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
+    pose.translation() = Eigen::Vector3d(t[0], t[1], t[2]);
+    return pose;
+  }
+  return std::nullopt;
+}
+
+double precisionOf(const std::string& map, const std::string& scene,
+                   const std::string& trajectory) {
+  const std::string json = map + ".score.json";
+  std::string output;
+  EXPECT_EQ(run(binary() + " evaluate map " + map + " --scene " + scene + " --trajectory " +
+                    trajectory + " --json " + json,
+                &output),
+            0)
+      << output;
+  return jsonNumber(readFile(json), "precision");
+}
+
+}  // namespace rgbdmap::test

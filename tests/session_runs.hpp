@@ -1,0 +1,39 @@
+#pragma once
+
+// Runs of the rgbdmap program around saved sessions, for the session tests (localising in one,
+// merging several): map a sequence, localise another, and read what they wrote.
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+
+#include "rgbdmap/capture/trajectory.hpp"
+
+namespace rgbdmap::test {
+
+// Maps `sequence` (odometry, loop closure) to `map`, MAP.session and the trajectories beside it.
+void mapTo(const std::string& sequence, const std::string& map);
+
+struct Localised {
+  int code = 0;
+  std::string log, stats;  // the output, and --stats' JSON (checked to parse)
+  Trajectory trajectory;   // OUT_trajectory.txt
+};
+// `rgbdmap --localise session` over `sequence`, its files named after `out` (no extension).
+Localised localise(const std::string& sequence, const std::string& session, const std::string& out);
+
+// A file's bytes, or a folder's (every file's name and bytes): to see that nothing changed.
+std::string digest(const std::string& path);
+
+// Two trajectories as one, in time order (runs scored in one alignment).
+Trajectory merged(const Trajectory& a, const Trajectory& b);
+
+// The transform `rgbdmap merge` wrote for `session` in TRANSFORMS.txt (none: left out).
+std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms,
+                                                   const std::string& session);
+
+// `rgbdmap evaluate map`'s precision at 1 cm of an odometry map, moved by `trajectory`'s
+// alignment to the scene's ground truth.
+double precisionOf(const std::string& map, const std::string& scene, const std::string& trajectory);
+
+}  // namespace rgbdmap::test

@@ -1,0 +1,86 @@
+// `rgbdmap merge` on real frames: two sequences of one desk joined in the first one's frame, a
+// session of another place said and left out, and what is refused. The synthetic room's case is
+// in test_sessions_room.cpp.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "session_runs.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+
+TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
+  const std::string dir = test::freshDir();
+  test::mapTo(test::tumDir(kRpy), dir + "/rpy.pcd");
+  test::mapTo(test::tumDir(kXyz), dir + "/xyz.pcd");
+  test::mapTo(test::sharedSynthetic("orbit_40", " --frames 40"), dir + "/room.pcd");
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " merge " + dir + "/rpy.session " + dir + "/room.session " +
+                          dir + "/xyz.session --out " + dir + "/merged.pcd",
+                      &output),
+            0)
+      << output;
+  EXPECT_NE(output.find(dir + "/room.session: shares no place with the other sessions: left out"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("merged 2 of 3 sessions"), std::string::npos) << output;
+  const std::string transforms = dir + "/merged_transforms.txt";
+  EXPECT_FALSE(test::mergedTransformOf(transforms, dir + "/room.session"));
+  const auto xyz = test::mergedTransformOf(transforms, dir + "/xyz.session");
+  ASSERT_TRUE(xyz) << test::readFile(transforms);
+
+  // Both sequences' motion capture shares one frame: fr1/xyz's keyframes moved by the transform
+  // merge found score with fr1/rpy's in one alignment as well as fr1/rpy's alone.
+  std::vector<StampedPose> moved;
+  const Trajectory xyz_keyframes = Trajectory::load(dir + "/xyz_keyframes.txt");
+  for (StampedPose p : xyz_keyframes.poses()) {
+    p.pose = *xyz * p.pose;
+    moved.push_back(p);
+  }
+  const Trajectory rpy = Trajectory::load(dir + "/rpy_keyframes.txt");
+  const Trajectory rpy_truth = Trajectory::load(test::tumDir(kRpy) + "/groundtruth.txt");
+  const double alone = absoluteTrajectoryError(rpy, rpy_truth).translation.rmse;
+  const double together =
+      absoluteTrajectoryError(
+          test::merged(rpy, Trajectory(moved)),
+          test::merged(rpy_truth, Trajectory::load(test::tumDir(kXyz) + "/groundtruth.txt")))
+          .translation.rmse;
+  std::cout << "fr1/rpy and fr1/xyz merged: ATE " << together * 100
+            << " cm in one alignment (fr1/rpy alone " << alone * 100 << " cm)\n";
+  EXPECT_LT(together, alone + 0.005);
+  EXPECT_LT(together, 0.035);
+
+  // The merged session reads back and holds both; its map has both runs' keyframes.
+  EXPECT_EQ(test::run(test::binary() + " session " + dir + "/merged.session", &output), 0)
+      << output;
+  EXPECT_GT(test::loadMap(dir + "/merged.pcd").size(), test::loadMap(dir + "/rpy.pcd").size());
+}
+
+TEST(SessionMerge, OneSessionOrABrokenOneIsRefused) {
+  const std::string dir = test::freshDir();
+  test::mapTo(test::tumDir(kXyz), dir + "/c.pcd");
+  std::string output;
+  EXPECT_EQ(
+      test::run(test::binary() + " merge " + dir + "/c.session --out " + dir + "/m.pcd", &output),
+      2);
+  EXPECT_NE(output.find("give two sessions or more"), std::string::npos) << output;
+  EXPECT_EQ(test::run(test::binary() + " merge " + dir + "/c.session " + dir +
+                          "/missing.session --out " + dir + "/m.pcd",
+                      &output),
+            2);
+  EXPECT_NE(output.find(dir + "/missing.session"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(dir + "/m.pcd"));
+}
+
+}  // namespace
+}  // namespace rgbdmap
