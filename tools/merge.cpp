@@ -12,12 +12,11 @@
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/session_merge.hpp"
+#include "rgbdmap/slam/motion.hpp"
 #include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {
 namespace {
-
-constexpr double kDegreesPerRadian = 57.29577951308232;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -76,8 +75,7 @@ int merge(const std::vector<std::string>& paths, const std::string& out) {
         "{}: placed by {} agreeing places (most of them {}'s): its frame {:.3f} m and {:.1f} "
         "degrees from the first session's",
         paths[i], p.links, paths[static_cast<std::size_t>(p.linked_to)],
-        p.transform.translation().norm(),
-        Eigen::AngleAxisd(p.transform.linear()).angle() * kDegreesPerRadian);
+        p.transform.translation().norm(), rotationAngle(p.transform) * kDegreesPerRadian);
   }
   if (!transforms) throw InputError(stem(out) + "_transforms.txt: cannot write");
 

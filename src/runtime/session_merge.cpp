@@ -7,13 +7,14 @@
 #include <map>
 
 #include "rgbdmap/mapping/keyframe_store.hpp"
+#include "rgbdmap/slam/motion.hpp"
 #include "rgbdmap/slam/place_recognition.hpp"
 #include "rgbdmap/slam/pose_graph.hpp"
 
 namespace rgbdmap {
 namespace {
 
-double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
 // A kept keyframe's graph keyframe: its anchor, or the nearest one the graph has (a keyframe
 // fused before the loop closer took its anchor in shares the newest correction; one with no
@@ -112,6 +113,16 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
   const std::size_t offset = merged.graph.keyframes.size();
   const std::size_t count = session.graph.keyframes.size();
   const auto id = [offset](int node) { return static_cast<int>(offset) + node; };
+  // A loop edge from the merged keyframe whose place was found to the session's keyframe.
+  const auto linkEdge = [&](const Match& m) {
+    PoseGraph::Edge e;
+    e.from = m.target;
+    e.to = id(m.node);
+    e.measurement = m.measurement;
+    e.sqrt_information = PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels);
+    e.loop = true;
+    return e;
+  };
   std::vector<Eigen::Isometry3d> poses;
   if (links.empty()) {  // the first session: the merged frame is its own
     for (const auto& k : session.graph.keyframes) poses.push_back(k.pose);
@@ -129,15 +140,7 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
       e.to = id(e.to);
       graph.addEdge(e);
     }
-    for (const Match& m : links) {
-      PoseGraph::Edge e;
-      e.from = m.target;
-      e.to = id(m.node);
-      e.measurement = m.measurement;
-      e.sqrt_information = PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels);
-      e.loop = true;
-      graph.addEdge(e);
-    }
+    for (const Match& m : links) graph.addEdge(linkEdge(m));
     graph.optimise(100, static_cast<int>(offset));
     for (std::size_t i = 0; i < count; ++i) poses.push_back(graph.pose(id(static_cast<int>(i))));
   }
@@ -150,15 +153,7 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
     e.to = id(e.to);
     merged.graph.edges.push_back(e);
   }
-  for (const Match& m : links) {
-    PoseGraph::Edge e;
-    e.from = m.target;
-    e.to = id(m.node);
-    e.measurement = m.measurement;
-    e.sqrt_information = PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels);
-    e.loop = true;
-    merged.graph.edges.push_back(e);
-  }
+  for (const Match& m : links) merged.graph.edges.push_back(linkEdge(m));
   merged.graph.places.resize(offset);
   for (std::size_t i = 0; i < count; ++i)
     merged.graph.places.push_back(i < session.graph.places.size() ? session.graph.places[i]

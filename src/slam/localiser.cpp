@@ -1,29 +1,24 @@
 #include "rgbdmap/slam/localiser.hpp"
 
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+
+#include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
 namespace {
 
 // Keyframes that may wait in a replay (each holds its full-resolution images).
 constexpr std::size_t kMaxQueued = 2;
-// The localiser's niceness (Linux: per thread): tracking comes first.
-constexpr int kNiceness = 5;
 // Nearest saved keyframes by pose compared by appearance, per keyframe, once placed.
 constexpr std::size_t kMaxCompared = 20;
-// A turn counts towards the path walked as this many metres per radian (as in loop closure).
-constexpr double kMetresPerRadian = 0.3;
 // After this many metres walked without a placement, the search covers the whole saved map
 // again (the estimate may have drifted beyond the nearby places).
 constexpr double kLostAfterMetres = 3.0;
-constexpr double kDegreesPerRadian = 57.29577951308232;
 
-double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
 }  // namespace
 
@@ -78,7 +73,7 @@ Localiser::Counts Localiser::counts() const {
 }
 
 void Localiser::run() {
-  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), kNiceness);
+  giveWayToTracking();
   for (;;) {
     TrackedKeyframe keyframe;
     {
@@ -101,7 +96,7 @@ void Localiser::run() {
 void Localiser::process(TrackedKeyframe& keyframe) {
   if (last_odometry_) {
     const Eigen::Isometry3d step = last_odometry_->inverse() * keyframe.pose;
-    walked_ += step.translation().norm() + kMetresPerRadian * angle(step);
+    walked_ += pathLength(step);
   }
   last_odometry_ = keyframe.pose;
   if (keyframe.color.empty() || keyframe.depth.empty()) return;

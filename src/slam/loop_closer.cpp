@@ -1,12 +1,12 @@
 #include "rgbdmap/slam/loop_closer.hpp"
 
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+
+#include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -14,20 +14,14 @@ namespace {
 // Keyframes that may wait for the loop thread. Each holds its full-resolution images (~2 MB); the
 // thread takes 50 ms (p50) per keyframe and keyframes come every 150 ms or more, so a few do.
 constexpr std::size_t kMaxQueued = 4;
-// The loop thread's niceness (Linux: per thread).
-constexpr int kNiceness = 5;
 // Nearest candidates by pose that are compared by appearance, per keyframe.
 constexpr std::size_t kMaxCompared = 20;
-// A turn counts towards the path walked as this many metres per radian: odometry drifts while
-// the camera turns in place too.
-constexpr double kMetresPerRadian = 0.3;
 // Corrections a loop may make beyond its drift allowance (m, rad).
 constexpr double kBaseAllowance = 0.05;
-constexpr double kDegreesPerRadian = 57.29577951308232;
 // A loop that moves the newest pose by this much (m, or rad) is worth a log line.
 constexpr double kNoticeableShift = 0.01;
 
-double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -89,7 +83,7 @@ void LoopCloser::readGraph(const std::function<void(const GraphView&)>& read) co
 
 void LoopCloser::run() {
   // Loop closure improves what tracking and fusion do; when two cores are short, they come first.
-  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), kNiceness);
+  giveWayToTracking();
   bool failed = false;
   for (;;) {
     TrackedKeyframe keyframe;

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 
+#include "rgbdmap/slam/motion.hpp"
+
 namespace rgbdmap {
 namespace {
 
-double angle(const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle(); }
+double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
 // The tracker's alignment settings, made finer and geometric for loops (LoopOptions).
 TrackingOptions verificationOptions(const TrackingOptions& tracking, const LoopOptions& loop) {

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+
+namespace rgbdmap {
+
+// What loop closure, localisation and merging measure of a camera's motion, one way for all.
+
+constexpr double kDegreesPerRadian = 57.29577951308232;
+// A turn counts towards the path walked as this many metres per radian: odometry drifts while
+// the camera turns in place too.
+constexpr double kMetresPerRadian = 0.3;
+
+inline double rotationAngle(const Eigen::Isometry3d& motion) {
+  return Eigen::AngleAxisd(motion.linear()).angle();
+}
+
+// The path a step adds, for the drift allowances that grow with it.
+inline double pathLength(const Eigen::Isometry3d& step) {
+  return step.translation().norm() + kMetresPerRadian * rotationAngle(step);
+}
+
+// The calling thread gives way to tracking and fusion when two cores are short (Linux: niceness
+// is per thread). Loop closure and localisation improve what those do; they come first.
+inline void giveWayToTracking() {
+  constexpr int kNiceness = 5;
+  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), kNiceness);
+}
+
+}  // namespace rgbdmap
