@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 void mapTo(const std::string& sequence, const std::string& map) {
   std::string output;
   ASSERT_EQ(run(binary() + " --source tum:" + sequence + " --out " + map +
-                    " --no-render --viewer none --set pose.source=odometry",
+                    " --rate max --no-render --viewer none --set pose.source=odometry",
                 &output),
             0)
       << output;
@@ -29,7 +29,7 @@ Localised localise(const std::string& sequence, const std::string& session,
                    const std::string& out) {
   Localised result;
   result.code = run(binary() + " --source tum:" + sequence + " --localise " + session + " --out " +
-                        out + ".pcd --no-render --viewer none --stats " + out + ".json",
+                        out + ".pcd --rate max --no-render --viewer none --stats " + out + ".json",
                     &result.log);
   result.stats = readFile(out + ".json");
   // The statistics are JSON a reader takes (a separator once went missing between two entries).

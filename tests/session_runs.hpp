@@ -11,7 +11,8 @@
 
 namespace rgbdmap::test {
 
-// Maps `sequence` (odometry, loop closure) to `map`, MAP.session and the trajectories beside it.
+// Maps `sequence` (odometry, loop closure; lossless, so that a sanitizer build maps the same) to
+// `map`, MAP.session and the trajectories beside it.
 void mapTo(const std::string& sequence, const std::string& map);
 
 struct Localised {
@@ -19,7 +20,8 @@ struct Localised {
   std::string log, stats;  // the output, and --stats' JSON (checked to parse)
   Trajectory trajectory;   // OUT_trajectory.txt
 };
-// `rgbdmap --localise session` over `sequence`, its files named after `out` (no extension).
+// `rgbdmap --localise session` over `sequence` (lossless), its files named after `out` (no
+// extension).
 Localised localise(const std::string& sequence, const std::string& session, const std::string& out);
 
 // A file's bytes, or a folder's (every file's name and bytes): to see that nothing changed.

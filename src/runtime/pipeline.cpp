@@ -193,9 +193,8 @@ int reportLocalisation(const Localiser::Counts& counts, const RunStats& stats) {
     return 1;
   }
   spdlog::info(
-      "localisation: {} of {} frames posed in the saved map as they came, {} before it was "
-      "recognised (keyframe {}; written in its frame since); {} placements of {} keyframes looked "
-      "for{}",
+      "localisation: {} of {} frames placed in the saved map, {} tracked before it was recognised "
+      "at keyframe {} (written in its frame since); {} placements of {} keyframes looked for{}",
       frames - std::min(frames, unplaced), frames, unplaced, counts.first_placed, counts.placed,
       counts.searched,
       counts.skipped > 0 ? fmt::format(", {} skipped behind the camera", counts.skipped) : "");
@@ -234,6 +233,8 @@ int Pipeline::run(RunControl& control) {
     localiser = std::make_unique<Localiser>(localise_in_->graph, config.camera, config.tracking,
                                             config.loop, config.filter.min_depth,
                                             config.filter.max_depth, *corrections, stats_, !live);
+  std::unique_ptr<FramesBeforePlacement> before_placement;
+  if (localising) before_placement = std::make_unique<FramesBeforePlacement>(*corrections);
   KeyframeSink* keyframe_sink =
       localiser ? static_cast<KeyframeSink*>(localiser.get()) : loop_closer.get();
   // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
@@ -300,10 +301,10 @@ int Pipeline::run(RunControl& control) {
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
   // keyframes (and so the map) independent of timing.
-  TrackingThread tracking({queue, tracker, fusion, publication,
-                           outputs_.publisher || localising ? corrections.get() : nullptr,
-                           localising ? corrections.get() : nullptr},
-                          !live, config.checkpoint, checkpoint, stats_, control, fail);
+  TrackingThread tracking(
+      {queue, tracker, fusion, publication,
+       outputs_.publisher || localising ? corrections.get() : nullptr, before_placement.get()},
+      !live, config.checkpoint, checkpoint, stats_, control, fail);
 
   // Wait: status until the tracking thread has taken every frame, then the rest in turn.
   StatusLine status(stats_, queue, outputs_.status_line, start);
@@ -333,7 +334,11 @@ int Pipeline::run(RunControl& control) {
     spdlog::error("{}", fatal);
     exit_code = 1;
   }
-  if (localiser) return std::max(exit_code, reportLocalisation(localiser->counts(), stats_));
+  if (localiser) {
+    const Localiser::Counts counts = localiser->counts();
+    stats_.frames_unplaced.store(before_placement->count(counts.first_placed));
+    return std::max(exit_code, reportLocalisation(counts, stats_));
+  }
   // Nothing mapped is a failure; most frames unused is worth saying.
   const bool stopped_on_request = control.stop.load() && fatal.empty();
   exit_code = std::max(

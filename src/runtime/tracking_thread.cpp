@@ -74,8 +74,7 @@ void TrackingThread::track(Frame& frame) {
       else
         stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
     }
-    if (parts_.placement && parts_.placement->snapshot().table->empty())
-      stats_.frames_unplaced.fetch_add(1, std::memory_order_relaxed);
+    if (parts_.before_placement && frame.has_pose) parts_.before_placement->add(frame.anchor);
     // The viewer is shown the pose after loop closures, like the written trajectory.
     if (parts_.viewer_corrections)
       frame.pose = parts_.viewer_corrections->snapshot().apply(frame.anchor, frame.pose);

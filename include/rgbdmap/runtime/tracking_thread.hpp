@@ -8,6 +8,7 @@
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/frame_tracker.hpp"
+#include "rgbdmap/runtime/frames_before_placement.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
 #include "rgbdmap/runtime/run_options.hpp"
@@ -33,9 +34,9 @@ class TrackingThread {
     MapPublication& publication;
     // Moves the poses the viewer is shown by the loop closures (null: shown as tracked).
     const PoseCorrections* viewer_corrections;
-    // Localising: frames posed before this has any correction (the saved map not recognised
-    // yet) are counted unplaced (null: not localising).
-    const PoseCorrections* placement = nullptr;
+    // Localising: every posed frame's anchor, to count those before the saved map was
+    // recognised (null: not localising).
+    FramesBeforePlacement* before_placement = nullptr;
   };
 
   // Starts the thread. `wait_for_fusion`: a keyframe waits for a fusion slot (a lossless replay,
