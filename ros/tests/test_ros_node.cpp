@@ -253,7 +253,7 @@ TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
   // The saved map: fr1/rpy mapped by the command line. The node localises fr1/xyz's bag in it;
   // so does the command line, from the folder, for comparison.
   std::string output;
-  const std::string cli = binary() + " --no-render --viewer none --source tum:";
+  const std::string cli = binary() + " --rate max --no-render --viewer none --source tum:";
   ASSERT_EQ(
       run(cli + tumDir(kRpy) + " --out " + dir_ + "/map.pcd --set pose.source=odometry", &output),
       0)
@@ -281,15 +281,21 @@ TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
   ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
   ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
   node.signal(SIGINT);
-  ASSERT_EQ(node.wait(60), 0) << readFile(node_log);
+  // A sanitizer build drops most frames at the recorded rate: it may never recognise the map,
+  // which ends the run with exit 1 (said in the log).
+  const int code = node.wait(60);
   const std::string log = readFile(node_log);
+  if (kRealTime)
+    ASSERT_EQ(code, 0) << log;
+  else
+    ASSERT_TRUE(code == 0 || (code == 1 && log.find("never recognised") != std::string::npos))
+        << log;
   EXPECT_NE(log.find("localising in " + dir_ + "/map.session"), std::string::npos) << log;
   // Nothing mapped, the saved map as it was.
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/localised.pcd"));
   EXPECT_EQ(readFile(dir_ + "/map.pcd"), map_before);
   const std::string stats = readFile(dir_ + "/stats.json");
   expectEveryFrameAccountedFor(dir_ + "/stats.json", 32);
-  // A sanitizer build drops most frames at the recorded rate: too few to be sure of a placement.
   if (!kRealTime) return;
   EXPECT_NE(log.find("localisation: placed in the saved map"), std::string::npos) << log;
   EXPECT_GT(jsonNumber(stats, "keyframes_placed"), 0) << stats;
