@@ -189,14 +189,14 @@ int reportLocalisation(const Localiser::Counts& counts, const RunStats& stats) {
     spdlog::error(
         "localisation: the saved map was never recognised ({} keyframes looked for); the {} "
         "frames' poses are written in the run's own frame",
-        counts.searched, frames);
+        stats.keyframes_looked_for.load(), frames);
     return 1;
   }
   spdlog::info(
       "localisation: {} of {} frames placed in the saved map, {} tracked before it was recognised "
       "at keyframe {} (written in its frame since); {} placements of {} keyframes looked for{}",
-      frames - std::min(frames, unplaced), frames, unplaced, counts.first_placed, counts.placed,
-      counts.searched,
+      frames - std::min(frames, unplaced), frames, unplaced, counts.first_placed,
+      stats.keyframes_placed.load(), stats.keyframes_looked_for.load(),
       counts.skipped > 0 ? fmt::format(", {} skipped behind the camera", counts.skipped) : "");
   return 0;
 }

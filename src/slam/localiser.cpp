@@ -113,10 +113,6 @@ void Localiser::process(TrackedKeyframe& keyframe) {
   const std::optional<LoopMeasurement> found =
       recognition_.find(candidatesFor(keyframe.pose, walked_), found_counts);
   recognition_.forget(slot);
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++counts_.searched;
-  }
   stats_.keyframes_looked_for.fetch_add(1, std::memory_order_relaxed);
 
   if (found) {
@@ -191,7 +187,6 @@ void Localiser::accept(const Placement& placement) {
   corrections_.publish(table_);
   stats_.keyframes_placed.fetch_add(1, std::memory_order_relaxed);
   std::lock_guard<std::mutex> lock(mutex_);
-  ++counts_.placed;
   if (first) {
     counts_.first_placed = static_cast<std::int64_t>(placement.keyframe);
     spdlog::info("localisation: placed in the saved map at keyframe {} (t = {:.3f})",

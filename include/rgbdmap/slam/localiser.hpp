@@ -43,9 +43,10 @@ class Localiser : public KeyframeSink {
   void finish();
   // The saved keyframes with a place (what can be recognised).
   std::size_t places() const { return place_ids_.size(); }
-  // Keyframes looked for, placed (a placement taken), and the first one placed (-1: none).
+  // Keyframes skipped behind a live camera, and the first one placed (-1: none). How many were
+  // looked for and placed is in RunStats (keyframes_looked_for, keyframes_placed).
   struct Counts {
-    std::uint64_t searched = 0, placed = 0, skipped = 0;
+    std::uint64_t skipped = 0;
     std::int64_t first_placed = -1;
   };
   Counts counts() const;
