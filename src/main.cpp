@@ -33,7 +33,8 @@ struct CommandLine {
   std::string mesh;
   std::string grid;
   std::string octomap;
-  std::string localise;  // a saved session to localise in
+  std::string localise;       // a saved session to localise in
+  std::string continue_from;  // a saved session to continue
   std::string viewer = "auto";
   bool no_render = false;
   bool quiet = false;
@@ -65,12 +66,21 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
   if (!o.grid.empty()) checkOutputFolder(o.grid, "--grid");
   if (!o.octomap.empty()) checkOutputFolder(o.octomap, "--octomap");
-  std::shared_ptr<const Session> localise_in;
-  if (!o.localise.empty()) {
+  // A saved session to start from: localised in (nothing mapped) or continued.
+  std::shared_ptr<const Session> saved;
+  const bool localise = !o.localise.empty();
+  const std::string saved_option =
+      localise ? "--localise " + o.localise : "--continue " + o.continue_from;
+  if (localise) {
     if (!o.mesh.empty() || !o.grid.empty() || !o.octomap.empty())
-      throw InputError("--localise " + o.localise +
+      throw InputError(saved_option +
                        ": nothing is mapped while localising (no --mesh, --grid or --octomap)");
-    localise_in = openSessionToLocaliseIn(o.localise, o.out, "--localise");
+    saved = openSessionToStartFrom(o.localise, o.out, "--localise", true);
+  } else if (!o.continue_from.empty()) {
+    if (!o.octomap.empty())
+      throw InputError(saved_option +
+                       ": a session keeps no free space to go on from (no --octomap)");
+    saved = openSessionToStartFrom(o.continue_from, o.out, "--continue", false);
   }
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
@@ -82,18 +92,22 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (stoppedDuringStartUp(control)) return 0;
-  // Localising needs the camera's own motion between placements.
-  if (localise_in && config.pose.source == "auto") config.pose.source = "odometry";
+  // Localising and continuing need the camera's own motion (between placements, before one).
+  if (saved && config.pose.source == "auto") config.pose.source = "odometry";
   config.pose.source = resolvePoseSource(
       config.pose.source, source->providesPoses(),
       source->describe() +
           ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
 
-  if (localise_in && !tracksKeyframes(config.pose, config.tracking))
-    throw InputError("--localise " + o.localise + ": needs the camera's odometry (pose.source=" +
-                     config.pose.source + ", tracking.method=" + config.tracking.method +
-                     "); use --set pose.source=odometry");
-  PipelineOutputs outputs = localise_in ? localisationOutputs(o.out) : outputsBeside(o.out, o.mesh);
+  if (saved && !tracksKeyframes(config.pose, config.tracking))
+    throw InputError(
+        saved_option + ": needs the camera's odometry (pose.source=" + config.pose.source +
+        ", tracking.method=" + config.tracking.method + "); use --set pose.source=odometry");
+  if (saved && !localise && !config.loop.enabled)
+    throw InputError(saved_option +
+                     ": goes on from the saved map with loop closure (its places "
+                     "and graph); loop.enabled=false turns it off");
+  PipelineOutputs outputs = localise ? localisationOutputs(o.out) : outputsBeside(o.out, o.mesh);
   outputs.grid_path = o.grid;
   outputs.octomap_path = o.octomap;
   outputs.status_line = !o.quiet;
@@ -107,7 +121,8 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   {
     const std::unique_ptr<Viewer> viewer = openRunViewer(o.viewer, control, o.out);
     if (viewer) outputs.publisher = &viewer->mailbox();
-    Pipeline pipeline(config, std::move(source), outputs, localise_in);
+    Pipeline pipeline(config, std::move(source), outputs, saved,
+                      localise ? Pipeline::SessionUse::kLocalise : Pipeline::SessionUse::kContinue);
     code = pipeline.run(control);
     if (!o.stats_file.empty()) {
       std::ofstream stats(o.stats_file);
@@ -115,7 +130,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
       if (!stats) spdlog::error("{}: cannot write statistics", o.stats_file);
     }
   }
-  if (!o.no_render && !localise_in) {
+  if (!o.no_render && !localise) {
     std::string error;
     if (renderMapFile(o.out, outputs.trajectory_path, picturePathOf(o.out), {}, error))
       spdlog::info("picture of the map: {}", picturePathOf(o.out));
@@ -157,6 +172,11 @@ int main(int argc, char** argv) {
   app.add_option("--localise", o.localise,
                  "localise in a saved session (MAP.session) instead of mapping: every frame's "
                  "pose in its map's frame, written to OUT_trajectory.txt; the map is not changed");
+  app.add_option("--continue", o.continue_from,
+                 "go on mapping from a saved session (MAP.session): mapped in this run's own frame "
+                 "until a saved place is recognised, then one map and one session with the saved "
+                 "one's, written to --out (the saved map is not changed)")
+      ->excludes("--localise");
   app.add_option("--stats", o.stats_file, "write counters and per-stage latency as JSON at exit");
   app.add_option("--viewer", o.viewer, "live window: auto (when a display is available) | none")
       ->check(CLI::IsMember({"auto", "none"}))

@@ -25,12 +25,15 @@ void mapTo(const std::string& sequence, const std::string& map) {
   ASSERT_TRUE(fs::is_directory(sessionPathOf(map))) << output;
 }
 
-Localised localise(const std::string& sequence, const std::string& session,
-                   const std::string& out) {
-  Localised result;
-  result.code = run(binary() + " --source tum:" + sequence + " --localise " + session + " --out " +
-                        out + ".pcd --rate max --no-render --viewer none --stats " + out + ".json",
-                    &result.log);
+namespace {
+
+SessionRun startFrom(const std::string& option, const std::string& sequence,
+                     const std::string& session, const std::string& out) {
+  SessionRun result;
+  result.code =
+      run(binary() + " --source tum:" + sequence + " " + option + " " + session + " --out " + out +
+              ".pcd --rate max --no-render --viewer none --stats " + out + ".json",
+          &result.log);
   result.stats = readFile(out + ".json");
   // The statistics are JSON a reader takes (a separator once went missing between two entries).
   EXPECT_EQ(run("python3 -c 'import json, sys; json.load(open(sys.argv[1]))' " + out + ".json"), 0)
@@ -38,6 +41,18 @@ Localised localise(const std::string& sequence, const std::string& session,
   if (fs::exists(out + "_trajectory.txt"))
     result.trajectory = Trajectory::load(out + "_trajectory.txt");
   return result;
+}
+
+}  // namespace
+
+SessionRun localise(const std::string& sequence, const std::string& session,
+                    const std::string& out) {
+  return startFrom("--localise", sequence, session, out);
+}
+
+SessionRun continueFrom(const std::string& sequence, const std::string& session,
+                        const std::string& out) {
+  return startFrom("--continue", sequence, session, out);
 }
 
 std::string digest(const std::string& path) {

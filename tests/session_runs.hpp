@@ -15,14 +15,18 @@ namespace rgbdmap::test {
 // `map`, MAP.session and the trajectories beside it.
 void mapTo(const std::string& sequence, const std::string& map);
 
-struct Localised {
+struct SessionRun {
   int code = 0;
   std::string log, stats;  // the output, and --stats' JSON (checked to parse)
-  Trajectory trajectory;   // OUT_trajectory.txt
+  Trajectory trajectory;   // OUT_trajectory.txt (every frame)
 };
 // `rgbdmap --localise session` over `sequence` (lossless), its files named after `out` (no
 // extension).
-Localised localise(const std::string& sequence, const std::string& session, const std::string& out);
+SessionRun localise(const std::string& sequence, const std::string& session,
+                    const std::string& out);
+// `rgbdmap --continue session` over `sequence` (lossless), writing OUT.pcd, OUT.session, ...
+SessionRun continueFrom(const std::string& sequence, const std::string& session,
+                        const std::string& out);
 
 // A file's bytes, or a folder's (every file's name and bytes): to see that nothing changed.
 std::string digest(const std::string& path);

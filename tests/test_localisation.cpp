@@ -27,7 +27,7 @@ TEST(Localisation, RealFramesOfAnotherSequenceArePosedInTheSavedDesksFrame) {
   test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
   const std::string map_before = test::digest(dir + "/map.pcd");
   const std::string session_before = test::digest(dir + "/map.session");
-  const test::Localised run =
+  const test::SessionRun run =
       test::localise(test::tumDir(kXyz), dir + "/map.session", dir + "/localised");
   ASSERT_EQ(run.code, 0) << run.log;
   ASSERT_EQ(run.trajectory.size(), 32u) << run.log;  // fr1/xyz's 37 frames, 32 associated
@@ -56,8 +56,8 @@ TEST(Localisation, ASavedMapNeverRecognisedIsSaidAndFails) {
   // fr1/rpy's desk, and frames of the synthetic room it has never seen.
   const std::string dir = test::freshDir();
   test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
-  const test::Localised run = test::localise(test::sharedSynthetic("orbit_40", " --frames 40"),
-                                             dir + "/map.session", dir + "/localised");
+  const test::SessionRun run = test::localise(test::sharedSynthetic("orbit_40", " --frames 40"),
+                                              dir + "/map.session", dir + "/localised");
   EXPECT_EQ(run.code, 1) << run.log;
   EXPECT_NE(run.log.find("the saved map was never recognised"), std::string::npos) << run.log;
   EXPECT_GT(test::jsonNumber(run.stats, "keyframes_looked_for"), 0) << run.stats;

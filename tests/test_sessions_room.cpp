@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 
@@ -41,7 +42,7 @@ class RoomSessions : public ::testing::Test {
 TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
   const std::string map_before = test::digest(dir_ + "/a.pcd");
   const std::string session_before = test::digest(dir_ + "/a.session");
-  const test::Localised run = test::localise(second_, dir_ + "/a.session", dir_ + "/localised");
+  const test::SessionRun run = test::localise(second_, dir_ + "/a.session", dir_ + "/localised");
   ASSERT_EQ(run.code, 0) << run.log;
   EXPECT_NE(run.log.find("localisation: placed in the saved map at keyframe"), std::string::npos)
       << run.log;
@@ -71,6 +72,80 @@ TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
   EXPECT_FALSE(fs::exists(dir_ + "/localised.session"));
   EXPECT_EQ(test::digest(dir_ + "/a.pcd"), map_before);
   EXPECT_EQ(test::digest(dir_ + "/a.session"), session_before);
+}
+
+// A continued session's keyframes, the saved run's (ids below `saved`) or the new one's, at the
+// graph's optimised poses, moved `by`, with their timestamps shifted by `shift` s.
+Trajectory partOf(const Session& session, std::size_t saved, bool saved_part,
+                  const Eigen::Isometry3d& by = Eigen::Isometry3d::Identity(), double shift = 0) {
+  Trajectory out;
+  for (std::size_t id = 0; id < session.graph.keyframes.size(); ++id)
+    if ((id < saved) == saved_part)
+      out.push_back(
+          {session.graph.keyframes[id].timestamp + shift, by * session.graph.keyframes[id].pose});
+  return out;
+}
+
+Trajectory shifted(const Trajectory& t, double shift) {
+  Trajectory out;
+  for (const StampedPose& p : t.poses()) out.push_back({p.timestamp + shift, p.pose});
+  return out;
+}
+
+TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
+  const std::string map_before = test::digest(dir_ + "/a.pcd");
+  const std::size_t saved = readSession(dir_ + "/a.session").graph.keyframes.size();
+  const test::SessionRun run = test::continueFrom(second_, dir_ + "/a.session", dir_ + "/b");
+  ASSERT_EQ(run.code, 0) << run.log;
+  EXPECT_NE(run.log.find("continuing: keyframe"), std::string::npos) << run.log;
+  // The saved map is recognised within a few frames of the start (it starts on ground the
+  // first walk saw).
+  const double unplaced = test::jsonNumber(run.stats, "frames_unplaced");
+  EXPECT_LE(unplaced, 30) << run.log;
+  EXPECT_EQ(test::digest(dir_ + "/a.pcd"), map_before);
+
+  // Both runs' keyframes in the continued session's one graph, scored against the truth in one
+  // alignment (the second run's clock shifted: the two walks share their timestamps).
+  const Session both = readSession(dir_ + "/b.session");
+  ASSERT_GT(both.graph.keyframes.size(), saved + 20) << run.log;
+  const double kShift = 1000.0;
+  const Trajectory estimate = test::merged(
+      partOf(both, saved, true), partOf(both, saved, false, Eigen::Isometry3d::Identity(), kShift));
+  const Trajectory truth =
+      test::merged(Trajectory::load(first_ + "/groundtruth.txt"),
+                   shifted(Trajectory::load(second_ + "/groundtruth.txt"), kShift));
+  const AbsoluteTrajectoryError ate = absoluteTrajectoryError(estimate, truth);
+  std::cout << "continued: " << unplaced << " frames before recognition; both runs' keyframes ATE "
+            << ate.translation.rmse * 100 << " cm in one alignment\n";
+  EXPECT_LT(ate.translation.rmse, 0.005);
+
+  // One map, as the graph has it: precise and complete where the first walk looked (a second
+  // layer from the second run placed off would cost precision), and no bigger than the two runs'
+  // keyframes fused into one TSDF by `rgbdmap merge` (plus 10%).
+  const std::string aligned = dir_ + "/b_saved_part.txt";
+  partOf(both, saved, true).save(aligned);
+  const std::string score = dir_ + "/b.score.json";
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " evaluate map " + dir_ + "/b.pcd --scene " + first_ +
+                          " --trajectory " + aligned + " --json " + score,
+                      &output),
+            0)
+      << output;
+  const double precision = test::jsonNumber(test::readFile(score), "precision");
+  const double recall = test::jsonNumber(test::readFile(score), "recall");
+  test::mapTo(second_, dir_ + "/b_alone.pcd");
+  ASSERT_EQ(test::run(test::binary() + " merge " + dir_ + "/a.session " + dir_ +
+                          "/b_alone.session --out " + dir_ + "/merged.pcd",
+                      &output),
+            0)
+      << output;
+  const std::size_t points = test::loadMap(dir_ + "/b.pcd").size();
+  const std::size_t merged = test::loadMap(dir_ + "/merged.pcd").size();
+  std::cout << "continued map: precision " << precision << ", recall " << recall << " at 1 cm; "
+            << points << " points, merged offline " << merged << "\n";
+  EXPECT_GE(precision, 0.995);
+  EXPECT_GE(recall, 0.98);
+  EXPECT_LE(static_cast<double>(points), 1.1 * static_cast<double>(merged));
 }
 
 TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {

@@ -1,9 +1,11 @@
 // `rgbdmap session MAP.session`: reads a saved session through, says what it holds, and refuses
 // one that is from another format version, truncated or corrupt (exit 2, naming the file).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
@@ -16,21 +18,29 @@ void addSessionCommand(CLI::App& app, Command& selected) {
       "session", "check a saved session (MAP.session) and say what it holds (docs/sessions.md)");
   auto path = std::make_shared<std::string>();
   auto map = std::make_shared<std::string>();
+  auto trajectory = std::make_shared<std::string>();
   cmd->add_option("session", *path, "the session folder, MAP.session beside MAP.pcd")->required();
   cmd->add_option("--map", *map,
                   "also fuse the session's kept keyframes at the graph's poses and write the map "
                   "it holds to this PCD");
-  cmd->callback([path, map, &selected] {
-    selected = [path, map] {
+  cmd->add_option("--trajectory", *trajectory,
+                  "also write the graph's keyframe poses (optimised) to this file, TUM format, in "
+                  "time order: a continued session's runs in one frame");
+  cmd->callback([path, map, trajectory, &selected] {
+    selected = [path, map, trajectory] {
       const Session session = readSession(*path);
       const SessionSummary s = summarise(session, *path);
       std::size_t place_points = 0;
       for (const auto& place : session.graph.places)
         if (place) place_points += place->view.points.size();
+      // (A continued session holds two runs, each in its own time.)
       double first = 0, last = 0;
       if (!session.graph.keyframes.empty()) {
-        first = session.graph.keyframes.front().timestamp;
-        last = session.graph.keyframes.back().timestamp;
+        first = last = session.graph.keyframes.front().timestamp;
+        for (const auto& k : session.graph.keyframes) {
+          first = std::min(first, k.timestamp);
+          last = std::max(last, k.timestamp);
+        }
       }
       std::printf(
           "%s: rgbdmap session, format version %u, %.1f MB\n"
@@ -42,6 +52,16 @@ void addSessionCommand(CLI::App& app, Command& selected) {
           s.keyframes, last - first, first, last, s.edges, s.loop_edges, s.places, place_points,
           s.kept_keyframes, session.camera.width, session.camera.height, session.camera.fx,
           session.camera.fy, session.camera.cx, session.camera.cy);
+      if (!trajectory->empty()) {
+        std::vector<StampedPose> poses;
+        for (const auto& k : session.graph.keyframes) poses.push_back({k.timestamp, k.pose});
+        std::stable_sort(
+            poses.begin(), poses.end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
+        Trajectory(std::move(poses)).save(*trajectory);
+        std::printf("trajectory: %zu keyframe poses written to %s\n",
+                    session.graph.keyframes.size(), trajectory->c_str());
+      }
       if (!map->empty()) {
         // With the run's own configuration: the same voxels, filters and observation count.
         Config config;

@@ -79,9 +79,9 @@ int runNode(RunControl& control, RunSignals& signals) {
   checkOutputFolder(settings.out, "~out");
   // Read before waiting for the camera: a session that cannot be used stops the node at once.
   const std::shared_ptr<const Session> localise_in =
-      settings.localise.empty()
-          ? nullptr
-          : openSessionToLocaliseIn(settings.localise, settings.out, pnh.resolveName("localise"));
+      settings.localise.empty() ? nullptr
+                                : openSessionToStartFrom(settings.localise, settings.out,
+                                                         pnh.resolveName("localise"), true);
   if (localise_in && config.pose.source == "auto") config.pose.source = "odometry";
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.

@@ -1,6 +1,7 @@
 #include "rgbdmap/mapping/keyframe_store.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -36,7 +37,9 @@ std::size_t KeyframeStore::mostRedundant() const {
   // The first and the newest stay: the run's ends.
   for (std::size_t i = 1; i + 1 < entries_.size(); ++i) {
     if (entries_[i].nearest > kUniqueViewpoint) continue;
-    const double gap = entries_[i + 1].timestamp - entries_[i - 1].timestamp;
+    // (Absolute: a continued session's keyframes follow the saved ones', whose clock may be
+    // another's.)
+    const double gap = std::abs(entries_[i + 1].timestamp - entries_[i - 1].timestamp);
     if (gap < best_gap) {
       best_gap = gap;
       best = i;
@@ -98,6 +101,14 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
     let_go.push_back(redundant);
   }
   return let_go;
+}
+
+void KeyframeStore::adopt(std::vector<Entry> earlier) {
+  for (const Entry& e : earlier) bytes_ += e.imageBytes();
+  entries_.insert(entries_.begin(), std::make_move_iterator(earlier.begin()),
+                  std::make_move_iterator(earlier.end()));
+  for (std::size_t i = 0; i < entries_.size(); ++i) findNearest(i);
+  while (bytes_ > budget_bytes_ && entries_.size() > 2) letGo(mostRedundant());
 }
 
 void KeyframeStore::decode(std::size_t i, Frame& frame) { decode(entries_.at(i), frame); }

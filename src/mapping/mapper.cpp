@@ -67,7 +67,7 @@ void Mapper::fuse(const Frame& keyframe) {
     refine(refusion_.refusion_pace);
   }
   keyframe_sink_->record(keyframe.timestamp, keyframe.pose, keyframe.anchor);
-  noteUp(keyframe);
+  noteUp(keyframe, pose);
   stats_.keyframes.fetch_add(1);
   stats_.map_bytes.store(memoryBytes());
   const auto now = std::chrono::steady_clock::now();
@@ -77,15 +77,45 @@ void Mapper::fuse(const Frame& keyframe) {
   }
 }
 
-void Mapper::noteUp(const Frame& keyframe) {
-  // At the pose tracked: a loop's correction turns a keyframe by a fraction of a degree.
-  const Eigen::Matrix3d rotation = keyframe.pose.linear();
+void Mapper::noteUp(const Frame& keyframe, const Eigen::Isometry3d& pose) {
+  // At the pose fused at: a later loop's correction turns a keyframe by a fraction of a degree
+  // (but joining a saved map may turn the whole run: then joinSaved() turns what is noted).
+  const Eigen::Matrix3d rotation = pose.linear();
   up_.camera_up -= rotation.col(1);
   if (keyframe.has_up) {
     up_.accelerometer_up += rotation * keyframe.up;
     ++up_.accelerometer_keyframes;
   }
-  up_.cameras.push_back(keyframe.pose.translation());
+  up_.cameras.push_back(pose.translation());
+}
+
+void Mapper::continueFrom(std::vector<KeyframeStore::Entry> saved) {
+  saved_ = std::move(saved);
+  awaiting_join_ = corrections_ != nullptr;
+}
+
+bool Mapper::joinSaved(const PoseCorrections::Snapshot& correction) {
+  if (!awaiting_join_ || !correction.joined) return false;
+  awaiting_join_ = false;
+  // What the run noted about up, moved with it into the saved frame; the saved keyframes' cameras
+  // added (the saved run's accelerometer is not kept).
+  const Eigen::Isometry3d moved = correction.of(correction.first_own);
+  up_.camera_up = moved.linear() * up_.camera_up;
+  up_.accelerometer_up = moved.linear() * up_.accelerometer_up;
+  for (Eigen::Vector3d& c : up_.cameras) c = moved * c;
+  for (const KeyframeStore::Entry& e : saved_) {
+    up_.camera_up -= e.fused_at.linear().col(1);
+    up_.cameras.push_back(e.fused_at.translation());
+  }
+  for (std::size_t i = 0; i < store_.size(); ++i)
+    store_[i].fused_at = corrected(correction, store_[i].anchor, store_[i].pose);
+  store_.adopt(std::move(saved_));
+  saved_ = {};
+  spdlog::info(
+      "continuing: the map is fused again from {} kept keyframes, the saved map's and "
+      "this run's, at the joined poses",
+      store_.size());
+  return true;
 }
 
 bool Mapper::lagsCorrections() {
@@ -104,7 +134,8 @@ bool Mapper::lagsCorrections() {
 bool Mapper::refine(int keyframes) {
   if (!corrections_) return false;
   if (!refusing()) {
-    if (!lagsCorrections()) return false;
+    // Joining a saved map takes in keyframes that are not in the TSDF at all: a pass in any case.
+    if (!joinSaved(corrections_->snapshot()) && !lagsCorrections()) return false;
     // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
     // while the pass fuses a new one in its place.
     auto cloud = std::make_shared<MapCloud>();
@@ -154,7 +185,9 @@ void Mapper::settle() {
 }
 
 std::size_t Mapper::memoryBytes() const {
-  return map_.memoryBytes() + store_.memoryBytes() +
+  std::size_t saved = 0;
+  for (const KeyframeStore::Entry& e : saved_) saved += e.imageBytes();
+  return map_.memoryBytes() + store_.memoryBytes() + saved +
          (shown_ ? shown_->size() * sizeof(MapCloud::PointType) : 0) +
          (shown_mesh_ ? shown_mesh_->memoryBytes() : 0) +
          (free_space_ ? free_space_->memoryBytes() : 0);

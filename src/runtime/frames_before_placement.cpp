@@ -8,7 +8,8 @@ void FramesBeforePlacement::add(std::int64_t anchor) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++frames_;
   if (placed_seen_) return;
-  if (!placement_.snapshot().table->empty()) {
+  const PoseCorrections::Snapshot placement = placement_.snapshot();
+  if (!placement.table->empty() && placement.joined) {
     placed_seen_ = true;  // later frames are anchored at or after the placement's keyframe
     return;
   }

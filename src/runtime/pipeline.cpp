@@ -99,6 +99,8 @@ CheckpointWriter::SessionFile sessionFile(const PipelineOutputs& outputs, const 
                                           const LoopCloser* loop_closer, const Config& config,
                                           const std::string& configuration) {
   if (outputs.session_path.empty() || !loop_closer || !config.checkpoint.session) return {};
+  // Continuing, until the run joins the saved map: its graph would hold two unrelated frames.
+  if (mapper.awaitingJoin()) return {};
   auto session = std::make_shared<Session>();
   session->created_by = std::string("rgbdmap ") + RGBDMAP_VERSION;
   session->camera = config.camera;
@@ -201,14 +203,32 @@ int reportLocalisation(const Localiser::Counts& counts, const RunStats& stats) {
   return 0;
 }
 
+// What a continued run says at its end; 1 when the saved map was never recognised.
+int reportContinuation(const LoopCloser& loop_closer, const RunStats& stats) {
+  if (loop_closer.joinedAt() < 0) {
+    spdlog::error(
+        "continuing: the saved map was never recognised ({} keyframes looked for): the map "
+        "written is this run's own, in its own frame, and no session is saved (it would hold two "
+        "maps in unrelated frames)",
+        stats.keyframes_looked_for.load());
+    return 1;
+  }
+  spdlog::info(
+      "continuing: joined the saved map at keyframe {}; {} frames were tracked before it was "
+      "recognised (written in its frame since)",
+      loop_closer.joinedAt(), stats.frames_unplaced.load());
+  return 0;
+}
+
 }  // namespace
 
 Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs,
-                   std::shared_ptr<const Session> localise_in)
+                   std::shared_ptr<const Session> saved, SessionUse use)
     : config_(std::move(config)),
       source_(std::move(source)),
       outputs_(std::move(outputs)),
-      localise_in_(std::move(localise_in)) {}
+      saved_(std::move(saved)),
+      use_(use) {}
 
 int Pipeline::run(RunControl& control) {
   Config config = forSource(config_, *source_);
@@ -217,24 +237,28 @@ int Pipeline::run(RunControl& control) {
   // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
   // move the trajectories, and the map follows them (Mapper).
   // Localising, the localiser publishes the corrections instead: the saved map's frame.
-  const bool localising = localise_in_ != nullptr && tracksKeyframes(config.pose, config.tracking);
-  stats_.loop_closure =
-      !localising && config.loop.enabled && tracksKeyframes(config.pose, config.tracking);
+  const bool keyframes = tracksKeyframes(config.pose, config.tracking);
+  const bool localising = saved_ && use_ == SessionUse::kLocalise && keyframes;
+  stats_.loop_closure = !localising && config.loop.enabled && keyframes;
+  // Continuing, loop closure goes on from the saved graph and places.
+  const bool continuing = saved_ && use_ == SessionUse::kContinue && stats_.loop_closure;
   stats_.localising = localising;
   std::unique_ptr<PoseCorrections> corrections;
   std::unique_ptr<LoopCloser> loop_closer;
   std::unique_ptr<Localiser> localiser;
   if (stats_.loop_closure || localising) corrections = std::make_unique<PoseCorrections>();
   if (stats_.loop_closure)
-    loop_closer = std::make_unique<LoopCloser>(config.camera, config.tracking, config.loop,
-                                               config.filter.min_depth, config.filter.max_depth,
-                                               *corrections, stats_, !live);
+    loop_closer =
+        std::make_unique<LoopCloser>(config.camera, config.tracking, config.loop,
+                                     config.filter.min_depth, config.filter.max_depth, *corrections,
+                                     stats_, !live, continuing ? &saved_->graph : nullptr);
   if (localising)
-    localiser = std::make_unique<Localiser>(localise_in_->graph, config.camera, config.tracking,
+    localiser = std::make_unique<Localiser>(saved_->graph, config.camera, config.tracking,
                                             config.loop, config.filter.min_depth,
                                             config.filter.max_depth, *corrections, stats_, !live);
   std::unique_ptr<FramesBeforePlacement> before_placement;
-  if (localising) before_placement = std::make_unique<FramesBeforePlacement>(*corrections);
+  if (localising || continuing)
+    before_placement = std::make_unique<FramesBeforePlacement>(*corrections);
   KeyframeSink* keyframe_sink =
       localiser ? static_cast<KeyframeSink*>(localiser.get()) : loop_closer.get();
   // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
@@ -256,11 +280,17 @@ int Pipeline::run(RunControl& control) {
                 corrections.get(), keyframe_file.get());
   mapper.keepMeshes(!outputs_.mesh_path.empty());
   if (!outputs_.octomap_path.empty()) mapper.keepFreeSpace(config.octomap);
+  if (continuing) mapper.continueFrom(saved_->keyframes);
   spdlog::info("source: {}", source_->describe());
   if (localising)
     spdlog::info("poses: {}, localising in a saved map of {} keyframes ({} places): nothing mapped",
-                 tracker.poses().describe(), localise_in_->graph.keyframes.size(),
-                 localiser->places());
+                 tracker.poses().describe(), saved_->graph.keyframes.size(), localiser->places());
+  else if (continuing)
+    spdlog::info(
+        "poses: {}, keyframes: {}, continuing a saved map of {} keyframes: mapped in this run's "
+        "own frame until a saved place is recognised, then in the saved map's",
+        tracker.poses().describe(), effectiveKeyframePolicy(config.keyframe, config.pose),
+        saved_->graph.keyframes.size());
   else
     spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
                  effectiveKeyframePolicy(config.keyframe, config.pose),
@@ -338,6 +368,10 @@ int Pipeline::run(RunControl& control) {
     const Localiser::Counts counts = localiser->counts();
     stats_.frames_unplaced.store(before_placement->count(counts.first_placed));
     return std::max(exit_code, reportLocalisation(counts, stats_));
+  }
+  if (continuing) {
+    stats_.frames_unplaced.store(before_placement->count(loop_closer->joinedAt()));
+    exit_code = std::max(exit_code, reportContinuation(*loop_closer, stats_));
   }
   // Nothing mapped is a failure; most frames unused is worth saying.
   const bool stopped_on_request = control.stop.load() && fatal.empty();

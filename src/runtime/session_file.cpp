@@ -375,24 +375,27 @@ Session readSession(const std::string& path) {
   return session;
 }
 
-std::shared_ptr<const Session> openSessionToLocaliseIn(const std::string& path,
-                                                       const std::string& map_path,
-                                                       const std::string& option) {
+std::shared_ptr<const Session> openSessionToStartFrom(const std::string& path,
+                                                      const std::string& map_path,
+                                                      const std::string& option, bool localise) {
   std::string saved = path;
   while (saved.size() > 1 && saved.back() == '/') saved.pop_back();
   std::error_code ec;
   if (fs::weakly_canonical(sessionPathOf(map_path), ec) == fs::weakly_canonical(saved, ec))
     throw InputError(option + " " + path + ": the run's files (" + map_path +
-                     ") would be written beside the saved map's; give it its own name (e.g. "
-                     "localised.pcd: its trajectory is localised_trajectory.txt)");
-  // The kept keyframes' images are for fusion: a localisation keeps only the graph and places.
+                     ") would be written beside the saved map's; give it its own name (e.g. " +
+                     (localise ? "localised.pcd: its trajectory is localised_trajectory.txt)"
+                               : "continued.pcd: the saved map stays as it was)"));
   Session read = readSession(path);
-  read.keyframes = {};
+  if (localise) read.keyframes = {};
   auto session = std::make_shared<const Session>(std::move(read));
   std::size_t places = 0;
   for (const auto& place : session->graph.places) places += place ? 1 : 0;
-  spdlog::info("localising in {}: {} keyframes, {} places (made by {})", path,
-               session->graph.keyframes.size(), places, session->created_by);
+  spdlog::info("{} {}: {} keyframes, {} places{} (made by {})",
+               localise ? "localising in" : "continuing", path, session->graph.keyframes.size(),
+               places,
+               localise ? "" : fmt::format(", {} kept keyframes", session->keyframes.size()),
+               session->created_by);
   return session;
 }
 

@@ -31,13 +31,48 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 LoopCloser::LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tracking,
                        const LoopOptions& loop, double min_depth, double max_depth,
-                       PoseCorrections& corrections, RunStats& stats, bool lossless)
+                       PoseCorrections& corrections, RunStats& stats, bool lossless,
+                       const Saved* continued)
     : options_(loop),
       corrections_(corrections),
       stats_(stats),
       lossless_(lossless),
-      places_(camera, tracking, loop, min_depth, max_depth),
-      thread_([this] { run(); }) {}
+      places_(camera, tracking, loop, min_depth, max_depth) {
+  if (continued) restore(*continued);
+  thread_ = std::thread([this] { run(); });
+}
+
+void LoopCloser::restore(const Saved& saved) {
+  const auto n = saved.keyframes.size();
+  if (n == 0) return;  // nothing to go on from: an ordinary run
+  // The path walked, along the odometry edges (a keyframe without one, the first of a part the
+  // saved run had not joined yet, goes on from the one before it).
+  std::vector<const PoseGraph::Edge*> odometry(n, nullptr);
+  for (const PoseGraph::Edge& e : saved.edges) {
+    graph_.addEdge(e);
+    if (!e.loop && e.from < e.to) odometry[static_cast<std::size_t>(e.to)] = &e;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    Node node;
+    node.timestamp = saved.keyframes[i].timestamp;
+    node.odometry = saved.keyframes[i].odometry;
+    if (const PoseGraph::Edge* e = odometry[i])
+      node.walked = nodes_[static_cast<std::size_t>(e->from)].walked + pathLength(e->measurement);
+    else if (i > 0)
+      node.walked = nodes_.back().walked;
+    nodes_.push_back(node);
+    graph_.addNode(saved.keyframes[i].pose);
+    if (i < saved.places.size() && saved.places[i]) {
+      places_.restore(static_cast<int>(i), saved.places[i]);
+      saved_places_.push_back(static_cast<int>(i));
+    }
+  }
+  first_own_ = static_cast<int>(n);
+  joined_ = false;
+  last_closed_ = first_own_ - 1;
+  stats_.place_bytes.store(places_.memoryBytes(), std::memory_order_relaxed);
+  publish();
+}
 
 LoopCloser::~LoopCloser() { finish(); }
 
@@ -134,8 +169,11 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   node.timestamp = keyframe.timestamp;
   node.odometry = keyframe.pose;
   std::unique_lock<std::mutex> graph_lock(graph_mutex_);
-  if (id == 0) {
+  if (id == 0 || (id == first_own_ && !joined_)) {
+    // The world's first keyframe, or this run's first while it is not tied to the saved map:
+    // held where odometry put it, so that its part of the graph has a frame of its own.
     graph_.addNode(keyframe.pose);
+    if (id > 0) graph_.hold(id, true);
   } else {
     // Tied to the keyframe it was tracked against; a keyframe without one (never, from the
     // dense tracker) is tied to the previous keyframe by odometry, weakly.
@@ -159,7 +197,9 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   keyframe.color.release();
   keyframe.depth.release();
   std::vector<LoopMeasurement> accepted;
-  if (places_.described(id)) {
+  const bool was_joined = joined_;
+  if (!joined_ && places_.described(id)) lookForSavedMap(id);
+  if (places_.described(id) && joined_ == was_joined) {
     PlaceRecognition::Counts counts;
     const std::optional<LoopMeasurement> loop = places_.find(candidatesFor(id), counts);
     stats_.loop_candidates.fetch_add(static_cast<std::uint64_t>(counts.proposed));
@@ -198,11 +238,13 @@ std::vector<int> LoopCloser::candidatesFor(int id) const {
   const Eigen::Vector3d axis = x.linear().col(2);
   const double walked = nodes_[static_cast<std::size_t>(id)].walked;
   std::vector<std::pair<double, int>> near;
-  for (int j = 0; j + options_.recent_keyframes < id; ++j) {
+  // Until the run joins a saved map, its own keyframes only: the saved ones are in another frame.
+  for (int j = joined_ ? 0 : first_own_; j + options_.recent_keyframes < id; ++j) {
     if (!places_.described(j)) continue;
     const Eigen::Isometry3d xj = graph_.pose(j);
+    // (A saved keyframe may be further along the path than this run's: its walk came first.)
     const double allowance =
-        options_.drift_per_metre * (walked - nodes_[static_cast<std::size_t>(j)].walked);
+        options_.drift_per_metre * std::abs(walked - nodes_[static_cast<std::size_t>(j)].walked);
     const double distance = (xj.translation() - x.translation()).norm();
     if (distance > options_.search_radius + allowance) continue;
     const double cosine = std::clamp(xj.linear().col(2).dot(axis), -1.0, 1.0);
@@ -218,7 +260,7 @@ std::vector<int> LoopCloser::candidatesFor(int id) const {
 
 bool LoopCloser::nearRememberedPlace(int id) const {
   const Eigen::Isometry3d x = graph_.pose(id);
-  for (int j = 0; j < id; ++j) {
+  for (int j = joined_ ? 0 : first_own_; j < id; ++j) {
     if (!places_.described(j)) continue;
     const Eigen::Isometry3d relative = graph_.pose(j).inverse() * x;
     if (relative.translation().norm() < options_.place_spacing &&
@@ -234,8 +276,8 @@ Eigen::Isometry3d LoopCloser::impliedPose(const LoopMeasurement& loop) const {
 
 bool LoopCloser::plausible(const LoopMeasurement& loop) const {
   const Eigen::Isometry3d correction = graph_.pose(loop.later).inverse() * impliedPose(loop);
-  const double walked = nodes_[static_cast<std::size_t>(loop.later)].walked -
-                        nodes_[static_cast<std::size_t>(loop.earlier)].walked;
+  const double walked = std::abs(nodes_[static_cast<std::size_t>(loop.later)].walked -
+                                 nodes_[static_cast<std::size_t>(loop.earlier)].walked);
   const double allowance = kBaseAllowance + options_.drift_per_metre * walked;
   return correction.translation().norm() <= allowance && angle(correction) <= allowance;
 }
@@ -303,7 +345,82 @@ void LoopCloser::publish() {
   PoseCorrections::Table table(nodes_.size());
   for (std::size_t i = 0; i < nodes_.size(); ++i)
     table[i] = graph_.pose(static_cast<int>(i)) * nodes_[i].odometry.inverse();
-  corrections_.publish(std::move(table));
+  corrections_.publish(std::move(table), first_own_, joined_);
+}
+
+void LoopCloser::lookForSavedMap(int id) {
+  PlaceRecognition::Counts counts;
+  const std::optional<LoopMeasurement> found = places_.find(saved_places_, counts);
+  stats_.keyframes_looked_for.fetch_add(1, std::memory_order_relaxed);
+  if (!found) return;
+  Placement placement;
+  placement.loop = *found;
+  placement.own_in_saved =
+      graph_.pose(found->earlier) * found->later_in_earlier * graph_.pose(id).inverse();
+  placement.own_in_saved.linear() =
+      Eigen::Quaterniond(placement.own_in_saved.linear()).normalized().toRotationMatrix();
+  stats_.keyframes_placed.fetch_add(1, std::memory_order_relaxed);
+  // A place that looks alike elsewhere rarely passes twice: the first placement waits for the
+  // next one, which must put the run's frame in the same place, give or take the odometry's drift
+  // between the two keyframes.
+  if (placement_ && id - placement_->loop.later <= options_.consistency_keyframes) {
+    const Node& a = nodes_[static_cast<std::size_t>(placement_->loop.later)];
+    const Node& b = nodes_[static_cast<std::size_t>(id)];
+    const double allowance = options_.drift_per_metre * std::abs(b.walked - a.walked);
+    const Eigen::Isometry3d change = placement_->own_in_saved.inverse() * placement.own_in_saved;
+    if (change.translation().norm() <= options_.consistent_translation + allowance &&
+        angle(change) <= options_.consistent_rotation + allowance && join(*placement_, placement))
+      return;
+  }
+  placement_ = placement;
+}
+
+bool LoopCloser::join(const Placement& first, const Placement& second) {
+  std::unique_lock<std::mutex> graph_lock(graph_mutex_);
+  const PoseGraph::Checkpoint before = graph_.checkpoint(first_own_);
+  // The run's part moved rigidly into the saved frame, then let go and optimised with the two
+  // loops (the saved part stays where it is: it is the map the run continues).
+  for (int i = first_own_; i < graph_.size(); ++i)
+    graph_.setPose(i, second.own_in_saved * graph_.pose(i));
+  graph_.hold(first_own_, false);
+  for (const Placement* p : {&first, &second})
+    graph_.addEdge(edgeOf(p->loop.earlier, p->loop.later, p->loop.later_in_earlier,
+                          p->loop.information, true));
+  const PoseGraph::Summary summary = graph_.optimise(100, first_own_);
+  stats_.optimise_latency.record(summary.seconds);
+  double worst = 0.0;
+  for (std::size_t i = graph_.edges().size() - 2; i < graph_.edges().size(); ++i)
+    worst = std::max(worst, graph_.whitenedError(graph_.edges()[i]));
+  if (!summary.usable || worst > options_.max_loop_residual) {
+    graph_.rollBack(before);
+    graph_.hold(first_own_, true);
+    stats_.loops_rejected.fetch_add(2);
+    spdlog::debug(
+        "saved map: placement at keyframes {} and {} rejected after optimising "
+        "(residual {:.2f})",
+        first.loop.later, second.loop.later, worst);
+    return false;
+  }
+  joined_ = true;
+  // Drift allowances between the two parts count along the path from where they met.
+  const double shift = nodes_[static_cast<std::size_t>(second.loop.earlier)].walked -
+                       nodes_[static_cast<std::size_t>(second.loop.later)].walked;
+  for (std::size_t i = static_cast<std::size_t>(first_own_); i < nodes_.size(); ++i)
+    nodes_[i].walked += shift;
+  graph_lock.unlock();
+  last_closed_ = second.loop.later;
+  placement_.reset();
+  pending_.clear();  // loops of the run's own frame, before it moved
+  stats_.loops_accepted.fetch_add(2);
+  joined_at_.store(second.loop.later);
+  const Node& own = nodes_[static_cast<std::size_t>(second.loop.later)];
+  const Node& saved = nodes_[static_cast<std::size_t>(second.loop.earlier)];
+  spdlog::info(
+      "continuing: keyframe {} (t {:.6f}) recognised saved keyframe {} (t {:.6f}), as keyframe "
+      "{} did: the run's {} keyframes so far joined the saved map's frame ({} ms)",
+      second.loop.later, own.timestamp, second.loop.earlier, saved.timestamp, first.loop.later,
+      graph_.size() - first_own_, static_cast<int>(summary.seconds * 1e3));
+  return true;
 }
 
 }  // namespace rgbdmap

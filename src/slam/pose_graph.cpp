@@ -43,7 +43,13 @@ struct RelativePoseCost {
 }  // namespace
 
 int PoseGraph::addNode(const Eigen::Isometry3d& estimate) {
-  Node n;
+  nodes_.emplace_back();
+  setPose(size() - 1, estimate);
+  return size() - 1;
+}
+
+void PoseGraph::setPose(int node, const Eigen::Isometry3d& estimate) {
+  Node& n = nodes_[static_cast<std::size_t>(node)];
   const Eigen::Quaterniond q(estimate.linear());
   const Eigen::Vector3d t = estimate.translation();
   for (int i = 0; i < 3; ++i) n.t[i] = t[i];
@@ -51,8 +57,11 @@ int PoseGraph::addNode(const Eigen::Isometry3d& estimate) {
   n.q[1] = q.y();
   n.q[2] = q.z();
   n.q[3] = q.w();
-  nodes_.push_back(n);
-  return size() - 1;
+}
+
+void PoseGraph::hold(int node, bool held) {
+  held_.erase(std::remove(held_.begin(), held_.end(), node), held_.end());
+  if (held) held_.push_back(node);
 }
 
 void PoseGraph::addEdge(const Edge& edge) { edges_.push_back(edge); }
@@ -122,7 +131,8 @@ PoseGraph::Summary PoseGraph::optimise(int max_iterations, int first_free) {
     Node& n = nodes_[i];
     if (!problem.HasParameterBlock(n.q)) continue;
     problem.SetManifold(n.q, &quaternion);
-    if (static_cast<int>(i) < first_free) {
+    if (static_cast<int>(i) < first_free ||
+        std::find(held_.begin(), held_.end(), static_cast<int>(i)) != held_.end()) {
       problem.SetParameterBlockConstant(n.t);
       problem.SetParameterBlockConstant(n.q);
     }

@@ -35,7 +35,9 @@ DenseTracker::DenseTracker(const CameraIntrinsics& camera, const TrackingOptions
       max_depth_(max_depth),
       aligner_(options),
       relocaliser_(camera, options.relocalisation_min_inliers, min_depth, max_depth),
-      sink_(sink) {}
+      sink_(sink),
+      first_id_(sink ? sink->firstKeyframeId() : 0),
+      next_id_(first_id_) {}
 
 DenseTracker::~DenseTracker() = default;
 
@@ -68,7 +70,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
                                 const Keyframe* from, const AlignmentResult& alignment) {
   if (sink_) {  // before `from` may leave the window below
     TrackedKeyframe out;
-    out.id = keyframes_made_;
+    out.id = next_id_;
     out.timestamp = frame.timestamp;
     out.pose = pose;
     if (from) {
@@ -81,7 +83,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
     sink_->addKeyframe(std::move(out));
   }
   auto keyframe = std::make_shared<Keyframe>();
-  keyframe->id = keyframes_made_;
+  keyframe->id = next_id_;
   keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
                             static_cast<float>(options_.min_gradient));
   keyframe->pose = pose;
@@ -90,7 +92,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
   while (static_cast<int>(keyframes_.size()) > std::max(1, options_.relocalisation_keyframes))
     keyframes_.pop_front();
   keyframe_ = keyframe;
-  ++keyframes_made_;
+  ++next_id_;
 }
 
 bool DenseTracker::accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state) {

@@ -6,17 +6,20 @@ const Eigen::Isometry3d kIdentity = Eigen::Isometry3d::Identity();
 }  // namespace
 
 const Eigen::Isometry3d& PoseCorrections::Snapshot::of(std::int64_t anchor) const {
-  if (anchor < 0 || !table || table->empty()) return kIdentity;
+  if (anchor < 0 || !table) return kIdentity;
   const auto i = static_cast<std::size_t>(anchor);
-  return i < table->size() ? (*table)[i] : table->back();
+  if (i < table->size()) return (*table)[i];
+  return static_cast<std::int64_t>(table->size()) > first_own ? table->back() : kIdentity;
 }
 
 PoseCorrections::PoseCorrections() { current_.table = std::make_shared<const Table>(); }
 
-void PoseCorrections::publish(Table table) {
+void PoseCorrections::publish(Table table, std::int64_t first_own, bool joined) {
   auto shared = std::make_shared<const Table>(std::move(table));
   std::lock_guard<std::mutex> lock(mutex_);
   current_.table = std::move(shared);
+  current_.first_own = first_own;
+  current_.joined = joined;
   ++current_.version;
 }
 

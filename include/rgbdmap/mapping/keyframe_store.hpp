@@ -50,6 +50,9 @@ class KeyframeStore {
   // Keeps the frame's images (`fused_at`: the corrected pose it was fused at), then lets kept
   // keyframes go while over budget. Returns the indices let go, each as it was when let go.
   std::vector<std::size_t> add(const Frame& frame, const Eigen::Isometry3d& fused_at);
+  // Takes in `earlier` (a saved session's kept keyframes, with their poses in this store's frame)
+  // before the keyframes kept so far, then lets kept keyframes go while over budget.
+  void adopt(std::vector<Entry> earlier);
   std::size_t size() const { return entries_.size(); }
   Entry& operator[](std::size_t i) { return entries_[i]; }
   const Entry& operator[](std::size_t i) const { return entries_[i]; }

@@ -48,6 +48,14 @@ class Mapper {
   // Until the map is fused at the latest corrections (before the final save).
   void settle();
 
+  // Continuing a saved session (--continue): its kept keyframes wait until the run joins the saved
+  // map's frame (PoseCorrections::Snapshot::joined); then they are taken in with the run's own
+  // and the map is fused again from all of them at the joined poses. Until then the map is the
+  // run's own, in its own frame (what is written if it never joins).
+  void continueFrom(std::vector<KeyframeStore::Entry> saved);
+  // Whether the run has yet to join the saved map it continues (then the map is the run's own).
+  bool awaitingJoin() const { return awaiting_join_; }
+
   // Whether meshes are asked for (meshSnapshot()): a pass then keeps the mesh it began from too.
   void keepMeshes(bool keep) { keep_meshes_ = keep; }
   // Whether an OctoMap is asked for: keyframes then also carve the free space they see through
@@ -82,9 +90,11 @@ class Mapper {
                               const Eigen::Isometry3d& pose) const;
   // Whether a kept keyframe's corrected pose has moved by refusion_shift from where it was fused.
   bool lagsCorrections();
+  // Takes in the saved keyframes once the run has joined their frame; returns whether it did.
+  bool joinSaved(const PoseCorrections::Snapshot& correction);
   bool refusing() const { return shown_ != nullptr; }
   void integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map);
-  void noteUp(const Frame& keyframe);
+  void noteUp(const Frame& keyframe, const Eigen::Isometry3d& pose);
 
   KeyframeIntegrator integrator_;
   double voxel_size_;
@@ -99,8 +109,10 @@ class Mapper {
   std::shared_ptr<const TriangleMesh> shown_mesh_;
   bool keep_meshes_ = false;
   std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> refused_at_;
-  std::uint64_t checked_version_ = 0;  // corrections compared with the kept keyframes
-  Frame decoded_;                      // a kept keyframe, decoded for re-fusion
+  std::uint64_t checked_version_ = 0;        // corrections compared with the kept keyframes
+  std::vector<KeyframeStore::Entry> saved_;  // continuing: until the run joins their frame
+  bool awaiting_join_ = false;
+  Frame decoded_;  // a kept keyframe, decoded for re-fusion
   AnchoredTrajectory keyframes_;
   PoseSink* keyframe_sink_;  // keyframes_ or the caller's
   UpEvidence up_;

@@ -38,11 +38,15 @@ struct PipelineOutputs {
 // after the source ends or a stop is requested, with the final map written.
 class Pipeline {
  public:
-  // `localise_in`: a saved session to localise in (--localise) instead of mapping: every frame is
-  // posed in the saved map's frame (trajectories, viewer, ROS), nothing is fused and no map is
-  // written (leave outputs.map_path empty); frames posed before the map is recognised are counted.
+  // `saved`: a saved session the run starts from, used as `use` says:
+  // - kLocalise (--localise): every frame is posed in the saved map's frame (trajectories,
+  //   viewer, ROS), nothing is fused and no map is written (leave outputs.map_path empty);
+  // - kContinue (--continue): the run maps in its own frame until it recognises the saved map,
+  //   then in the saved map's, and writes one map and one session of both (LoopCloser, Mapper).
+  // Either way frames posed before the saved map is recognised are counted.
+  enum class SessionUse { kLocalise, kContinue };
   Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs,
-           std::shared_ptr<const Session> localise_in = nullptr);
+           std::shared_ptr<const Session> saved = nullptr, SessionUse use = SessionUse::kLocalise);
 
   // Returns the process exit code: 0 on success, 1 when the run stopped on bad input or a failed
   // final write (the map built so far is still saved).
@@ -53,7 +57,8 @@ class Pipeline {
   Config config_;
   std::unique_ptr<FrameSource> source_;
   PipelineOutputs outputs_;
-  std::shared_ptr<const Session> localise_in_;
+  std::shared_ptr<const Session> saved_;
+  SessionUse use_;
   RunStats stats_;
 };
 

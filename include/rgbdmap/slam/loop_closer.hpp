@@ -1,10 +1,12 @@
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -27,13 +29,6 @@ class LoopCloser : public KeyframeSink {
   struct Node;  // a keyframe in the graph (below)
 
  public:
-  // lossless: block addKeyframe() while the queue is full instead of skipping the search.
-  // The first five as PlaceRecognition's.
-  LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tracking,
-             const LoopOptions& loop, double min_depth, double max_depth,
-             PoseCorrections& corrections, RunStats& stats, bool lossless);
-  ~LoopCloser() override;
-
   // What a session saved keeps of loop closure: every keyframe with its odometry and optimised
   // pose, the graph's edges, and the places (by keyframe id, null where none; shared).
   struct Saved {
@@ -47,6 +42,18 @@ class LoopCloser : public KeyframeSink {
     std::vector<std::shared_ptr<const PlaceRecognition::Place>> places;
   };
 
+  // lossless: block addKeyframe() while the queue is full instead of skipping the search.
+  // The first five as PlaceRecognition's.
+  // `continued`: a saved session's graph and places to go on from (--continue). The tracker's
+  // keyframes then take ids after the saved ones (firstKeyframeId()) and form a graph of their
+  // own, in the run's own frame, until one of them is recognised among the saved places and a
+  // second one agrees: then the run's part is moved into the saved map's frame, tied to it by
+  // those two loops, and from there on it is one graph (see joinedAt()).
+  LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+             const LoopOptions& loop, double min_depth, double max_depth,
+             PoseCorrections& corrections, RunStats& stats, bool lossless,
+             const Saved* continued = nullptr);
+  ~LoopCloser() override;
   // The graph as it is, seen under its lock (GraphView is only made by readGraph()).
   class GraphView {
    public:
@@ -63,6 +70,7 @@ class LoopCloser : public KeyframeSink {
   };
 
   void addKeyframe(TrackedKeyframe keyframe) override;
+  std::uint64_t firstKeyframeId() const override { return static_cast<std::uint64_t>(first_own_); }
   // Processes every queued keyframe, then stops the thread. The corrections are final after it.
   void finish();
   // Calls `read` with the graph as it is now, from any thread: the loop thread waits while it
@@ -76,6 +84,9 @@ class LoopCloser : public KeyframeSink {
   }
   // Lets the places go (after finish() and the last save: no keyframe comes any more).
   void forgetPlaces();
+  // Continuing a saved session: the keyframe at which the run joined the saved map (-1: not
+  // yet, or never); after finish(), final.
+  std::int64_t joinedAt() const { return joined_at_.load(); }
 
  private:
   struct Node {
@@ -87,9 +98,18 @@ class LoopCloser : public KeyframeSink {
     LoopMeasurement loop;
     bool accepted = false;
   };
+  struct Placement {  // where a saved keyframe says the run's own frame lies in the saved map's
+    LoopMeasurement loop;
+    Eigen::Isometry3d own_in_saved = Eigen::Isometry3d::Identity();
+  };
 
   void run();
+  void restore(const Saved& saved);
   void process(TrackedKeyframe& keyframe);
+  // Continuing, not joined yet: looks for keyframe `id` among the saved places; joins the saved
+  // map once two placements agree.
+  void lookForSavedMap(int id);
+  bool join(const Placement& first, const Placement& second);
   std::vector<int> candidatesFor(int id) const;
   // Whether an earlier keyframe kept as a place is within loop.place_spacing of `id`.
   bool nearRememberedPlace(int id) const;
@@ -113,6 +133,13 @@ class LoopCloser : public KeyframeSink {
   mutable std::mutex graph_mutex_;
   std::deque<Pending> pending_;
   int last_closed_ = -1;  // the newest keyframe of the last loop closed
+  // Continuing: the saved keyframes are 0..first_own_-1; until joined, the run's own part is
+  // held at its first keyframe, and only the saved places are searched for it.
+  int first_own_ = 0;
+  bool joined_ = true;
+  std::vector<int> saved_places_;
+  std::optional<Placement> placement_;  // waiting for a second that agrees
+  std::atomic<std::int64_t> joined_at_{-1};
 
   std::mutex mutex_;
   std::condition_variable changed_;

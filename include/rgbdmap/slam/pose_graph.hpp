@@ -7,7 +7,8 @@
 namespace rgbdmap {
 
 // Keyframe poses as nodes, measured relative motions as edges; optimised with Ceres
-// (Levenberg-Marquardt, sparse normal Cholesky). Node 0 is held fixed: it defines the world.
+// (Levenberg-Marquardt, sparse normal Cholesky). Node 0 is held fixed: it defines the world (and
+// so does any node held by hold(): the root of a part of the graph not tied to the rest yet).
 // An edge's error is log(Z^-1 * X_from^-1 * X_to) with the rotation part approximated by twice
 // the vector part of the quaternion, [translation, rotation], whitened by the square root of
 // the edge's information.
@@ -40,6 +41,9 @@ class PoseGraph {
   };
 
   int addNode(const Eigen::Isometry3d& estimate);  // returns the node's index
+  void setPose(int node, const Eigen::Isometry3d& estimate);
+  // Holds a node fixed in optimise() (or lets it go again).
+  void hold(int node, bool held);
   void addEdge(const Edge& edge);
   void removeLastEdges(std::size_t count);  // undoes the last `count` addEdge calls
   Checkpoint checkpoint(int first_free) const;
@@ -63,6 +67,7 @@ class PoseGraph {
  private:
   std::vector<Node> nodes_;
   std::deque<Edge> edges_;
+  std::vector<int> held_;
 };
 
 }  // namespace rgbdmap

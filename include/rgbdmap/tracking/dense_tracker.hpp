@@ -32,7 +32,7 @@ class DenseTracker : public PoseProvider {
   std::string describe() const override;
   TrackingState state() const override { return state_; }
 
-  std::uint64_t keyframes() const { return keyframes_made_; }
+  std::uint64_t keyframes() const { return next_id_ - first_id_; }
 
  private:
   struct Keyframe {
@@ -68,7 +68,8 @@ class DenseTracker : public PoseProvider {
   bool started_ = false;
   bool lost_ = false;
   TrackingState state_ = TrackingState::kNoPose;
-  std::uint64_t keyframes_made_ = 0;
+  std::uint64_t first_id_;  // the sink's firstKeyframeId()
+  std::uint64_t next_id_;
 };
 
 }  // namespace rgbdmap

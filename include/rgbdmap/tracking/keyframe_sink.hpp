@@ -10,7 +10,8 @@ namespace rgbdmap {
 // measured motion from the keyframe it was tracked against) and what place recognition needs
 // (its images).
 struct TrackedKeyframe {
-  std::uint64_t id = 0;  // 0, 1, 2, ... in the order made
+  // In the order made: 0, 1, 2, ..., or from the sink's firstKeyframeId() on.
+  std::uint64_t id = 0;
   double timestamp = 0.0;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // odometry, camera-to-world
   std::int64_t reference = -1;  // the keyframe it was tracked against; -1 for the first
@@ -29,6 +30,9 @@ class KeyframeSink {
  public:
   virtual ~KeyframeSink() = default;
   virtual void addKeyframe(TrackedKeyframe keyframe) = 0;
+  // The id the tracker's first keyframe takes: above a saved session's keyframes when the sink
+  // continues one, so that one id names one keyframe in the graph, the map and the corrections.
+  virtual std::uint64_t firstKeyframeId() const { return 0; }
 };
 
 }  // namespace rgbdmap

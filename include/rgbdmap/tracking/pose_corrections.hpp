@@ -22,8 +22,15 @@ class PoseCorrections {
   struct Snapshot {
     std::shared_ptr<const Table> table;  // by keyframe id
     std::uint64_t version = 0;           // changes whenever a correction does
+    // A run that continues a saved session (--continue) takes its keyframe ids from
+    // `first_own` on (the saved ones come first). Until it recognises the saved map (`joined`),
+    // its own keyframes' corrections are in its own frame and the saved ones' in the saved map's:
+    // two maps that nothing ties together yet.
+    std::int64_t first_own = 0;
+    bool joined = true;
     // The correction of keyframe `anchor`; a keyframe the graph has not taken in yet shares the
-    // newest known correction (it was tracked from there); -1 (no anchor) is not corrected.
+    // newest known correction (it was tracked from there), or none when the graph has none of
+    // the run's own yet; -1 (no anchor) is not corrected.
     const Eigen::Isometry3d& of(std::int64_t anchor) const;
     Eigen::Isometry3d apply(std::int64_t anchor, const Eigen::Isometry3d& pose) const {
       return of(anchor) * pose;
@@ -31,8 +38,8 @@ class PoseCorrections {
   };
 
   PoseCorrections();
-  // Loop thread: the corrections of keyframes 0..n-1 (n never shrinks).
-  void publish(Table table);
+  // Loop thread: the corrections of keyframes 0..n-1 (n never shrinks); see Snapshot.
+  void publish(Table table, std::int64_t first_own = 0, bool joined = true);
   Snapshot snapshot() const;
   std::uint64_t version() const;
 
