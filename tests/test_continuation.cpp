@@ -1,0 +1,128 @@
+// A run that continues a saved session (--continue MAP.session) on real frames: another
+// sequence's frames join the saved desk's map, a saved map never recognised leaves the run's own
+// map, and what is refused. Threads: the loop closer joins the saved map while tracking and fusion
+// read its corrections (run under ThreadSanitizer). The synthetic room's case is in
+// test_sessions_room.cpp.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+#include "session_runs.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+
+Trajectory graphOf(const std::string& session) {
+  Trajectory out;
+  for (const auto& k : readSession(session).graph.keyframes) out.push_back({k.timestamp, k.pose});
+  return out;
+}
+
+TEST(Continuation, RealFramesOfAnotherSequenceJoinTheSavedDesksMap) {
+  // fr1/xyz looks at the desk fr1/rpy was mapped from; both have the motion capture's poses in
+  // one frame, so the continued session's keyframes, old and new, are scored in one alignment.
+  const std::string dir = test::freshDir();
+  test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
+  const std::string map_before = test::digest(dir + "/map.pcd");
+  const std::string session_before = test::digest(dir + "/map.session");
+  const test::SessionRun run =
+      test::continueFrom(test::tumDir(kXyz), dir + "/map.session", dir + "/more");
+  ASSERT_EQ(run.code, 0) << run.log;
+  EXPECT_NE(run.log.find("continuing: keyframe"), std::string::npos) << run.log;
+  EXPECT_LE(test::jsonNumber(run.stats, "frames_unplaced"), 15) << run.stats;
+  // The saved map stays as it was; the continued one is written beside the new name.
+  EXPECT_EQ(test::digest(dir + "/map.pcd"), map_before);
+  EXPECT_EQ(test::digest(dir + "/map.session"), session_before);
+
+  const Trajectory saved = graphOf(dir + "/map.session");
+  const Trajectory both = graphOf(dir + "/more.session");
+  ASSERT_GT(both.size(), saved.size()) << run.log;
+  const Trajectory truth = test::merged(Trajectory::load(test::tumDir(kRpy) + "/groundtruth.txt"),
+                                        Trajectory::load(test::tumDir(kXyz) + "/groundtruth.txt"));
+  const double alone = absoluteTrajectoryError(saved, truth).translation.rmse;
+  const double together = absoluteTrajectoryError(both, truth).translation.rmse;
+  // One surface where they overlap: no more points than both runs' keyframes fused into one
+  // TSDF offline (rgbdmap merge), plus 10%.
+  test::mapTo(test::tumDir(kXyz), dir + "/xyz.pcd");
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " merge " + dir + "/map.session " + dir +
+                          "/xyz.session --out " + dir + "/merged.pcd",
+                      &output),
+            0)
+      << output;
+  const std::size_t points = test::loadMap(dir + "/more.pcd").size();
+  const std::size_t merged = test::loadMap(dir + "/merged.pcd").size();
+  std::cout << "fr1/xyz continuing fr1/rpy's map: "
+            << test::jsonNumber(run.stats, "frames_unplaced")
+            << " frames before recognition; graph ATE " << together * 100
+            << " cm (the saved keyframes alone " << alone * 100 << " cm); " << points
+            << " points, merged offline " << merged << "\n";
+  EXPECT_LT(together, alone + 0.005);
+  EXPECT_LT(together, 0.035);
+  EXPECT_GT(points, test::loadMap(dir + "/map.pcd").size());
+  EXPECT_LE(static_cast<double>(points), 1.1 * static_cast<double>(merged));
+  // The continued session continues again: it reads back whole.
+  EXPECT_EQ(test::run(test::binary() + " session " + dir + "/more.session", &output), 0) << output;
+}
+
+TEST(Continuation, ASavedMapNeverRecognisedLeavesTheRunsOwnMap) {
+  // fr1/rpy's desk, and frames of the synthetic room it has never seen.
+  const std::string dir = test::freshDir();
+  test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
+  const std::string orbit = test::sharedSynthetic("orbit_40", " --frames 40");
+  const test::SessionRun run = test::continueFrom(orbit, dir + "/map.session", dir + "/more");
+  EXPECT_EQ(run.code, 1) << run.log;
+  EXPECT_NE(run.log.find("the saved map was never recognised"), std::string::npos) << run.log;
+  EXPECT_GT(test::jsonNumber(run.stats, "keyframes_looked_for"), 0) << run.stats;
+  EXPECT_EQ(test::jsonNumber(run.stats, "frames_unplaced"),
+            test::jsonNumber(run.stats, "frames_processed"));
+  // Its own map, in its own frame, as a run from nothing gives it; no session of two frames.
+  EXPECT_FALSE(fs::exists(dir + "/more.session"));
+  test::mapTo(orbit, dir + "/alone.pcd");
+  const double own = static_cast<double>(test::loadMap(dir + "/more.pcd").size());
+  const double alone = static_cast<double>(test::loadMap(dir + "/alone.pcd").size());
+  EXPECT_NEAR(own, alone, 0.01 * alone);
+  // Where it is: the same surfaces, as precise as the run from nothing.
+  EXPECT_NEAR(test::precisionOf(dir + "/more.pcd", orbit, dir + "/more_keyframes.txt"),
+              test::precisionOf(dir + "/alone.pcd", orbit, dir + "/alone_keyframes.txt"), 0.005);
+}
+
+TEST(Continuation, RefusesWhatCannotGoOnFromASession) {
+  const std::string dir = test::freshDir();
+  test::mapTo(test::tumDir(kXyz), dir + "/map.pcd");
+  const std::string before = test::digest(dir + "/map.pcd");
+  const std::string cli = test::binary() + " --source tum:" + test::tumDir(kXyz) +
+                          " --no-render --viewer none --continue " + dir;
+  std::string output;
+  EXPECT_EQ(test::run(cli + "/map.session --out " + dir + "/map.pcd", &output), 2);
+  EXPECT_NE(output.find("would be written beside the saved map"), std::string::npos) << output;
+  EXPECT_EQ(test::digest(dir + "/map.pcd"), before);
+  EXPECT_EQ(
+      test::run(cli + "/map.session --out " + dir + "/b.pcd --octomap " + dir + "/b.bt", &output),
+      2);
+  EXPECT_NE(output.find("keeps no free space"), std::string::npos) << output;
+  EXPECT_EQ(
+      test::run(cli + "/map.session --out " + dir + "/b.pcd --set loop.enabled=false", &output), 2);
+  EXPECT_NE(output.find("loop.enabled=false"), std::string::npos) << output;
+  EXPECT_EQ(test::run(cli + "/missing.session --out " + dir + "/b.pcd", &output), 2);
+  EXPECT_NE(output.find(dir + "/missing.session"), std::string::npos) << output;
+  EXPECT_NE(
+      test::run(cli + "/map.session --localise " + dir + "/map.session --out " + dir + "/b.pcd",
+                &output),
+      0);
+  EXPECT_NE(output.find("excludes"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(dir + "/b.pcd"));
+}
+
+}  // namespace
+}  // namespace rgbdmap
