@@ -90,6 +90,14 @@ std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms
   return std::nullopt;
 }
 
+std::size_t mergedPoints(const std::string& first, const std::string& second,
+                         const std::string& out) {
+  std::string output;
+  EXPECT_EQ(run(binary() + " merge " + first + " " + second + " --out " + out, &output), 0)
+      << output;
+  return fs::exists(out) ? loadMap(out).size() : 0;
+}
+
 double precisionOf(const std::string& map, const std::string& scene,
                    const std::string& trajectory) {
   const std::string json = map + ".score.json";

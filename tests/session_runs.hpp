@@ -38,6 +38,11 @@ Trajectory merged(const Trajectory& a, const Trajectory& b);
 std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms,
                                                    const std::string& session);
 
+// The points of the map `rgbdmap merge first second --out OUT` writes (both runs' kept keyframes
+// fused into one TSDF): what a continued map is compared with.
+std::size_t mergedPoints(const std::string& first, const std::string& second,
+                         const std::string& out);
+
 // `rgbdmap evaluate map`'s precision at 1 cm of an odometry map, moved by `trajectory`'s
 // alignment to the scene's ground truth.
 double precisionOf(const std::string& map, const std::string& scene, const std::string& trajectory);

@@ -67,7 +67,8 @@ TEST(PipelineFusion, FusedOnItsThreadGivesTheSameMapAsFusedInTurn) {
                     sequential_stats);
   for (const Frame& frame : f.frames) sequential.fuse(frame);
 
-  Mapper threaded(f.config.camera, f.config.filter, f.config.map, f.config.refusion, threaded_stats);
+  Mapper threaded(f.config.camera, f.config.filter, f.config.map, f.config.refusion,
+                  threaded_stats);
   {
     FusionThread fusion(threaded, 2, 640, 480, nullptr);
     for (const Frame& frame : f.frames) ASSERT_TRUE(fusion.submit(frame, true));

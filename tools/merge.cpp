@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
@@ -17,10 +18,6 @@
 
 namespace rgbdmap {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // "tx ty tz qx qy qz qw", TUM's order.
 std::string tumPose(const Eigen::Isometry3d& pose) {

@@ -5,12 +5,10 @@
 #include <algorithm>
 #include <chrono>
 
+#include "rgbdmap/base/steady_time.hpp"
+
 namespace rgbdmap {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 TsdfIntegrator makeTsdf(const CameraIntrinsics& camera, const FilterOptions& filter,
                         const MapOptions& map) {

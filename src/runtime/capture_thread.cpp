@@ -6,17 +6,13 @@
 #include <exception>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 
 namespace rgbdmap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// The clock of Frame::captured_at, which the tracking thread reads it against.
-double steadySeconds() {
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
 
 }  // namespace
 
@@ -58,7 +54,7 @@ void CaptureThread::read() {
       waitForCamera();
       continue;
     }
-    stats_.read_latency.record(std::chrono::duration<double>(Clock::now() - read_start).count());
+    stats_.read_latency.record(secondsSince(read_start));
     frame->index = index_++;
     frame->captured_at = steadySeconds();
     stats_.frames_captured.fetch_add(1);

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <vector>
 
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/runtime/grid_file.hpp"
 #include "rgbdmap/runtime/octomap_file.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
@@ -150,10 +151,6 @@ namespace {
 void addFailure(CheckpointWriter::Result& result, const std::string& message) {
   result.error += (result.error.empty() ? "" : "; ") + message;
   result.ok = false;
-}
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace

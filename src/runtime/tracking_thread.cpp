@@ -3,17 +3,13 @@
 #include <chrono>
 #include <exception>
 
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 
 namespace rgbdmap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// The clock of Frame::captured_at, set by the capture thread.
-double steadySeconds() {
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
 
 }  // namespace
 
@@ -42,8 +38,7 @@ void TrackingThread::run() {
       track(*frame);
       parts_.queue.release(frame);
       stats_.frames_processed.fetch_add(1);
-      stats_.track_latency.record(
-          std::chrono::duration<double>(Clock::now() - track_start).count());
+      stats_.track_latency.record(secondsSince(track_start));
     }
     // Also while no frame comes (a camera paused, a bag played to its end): the subscriber
     // still gets the map with the last keyframes in it.

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
@@ -22,10 +23,6 @@ constexpr double kBaseAllowance = 0.05;
 constexpr double kNoticeableShift = 0.01;
 
 double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 
