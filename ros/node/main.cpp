@@ -82,7 +82,15 @@ int runNode(RunControl& control, RunSignals& signals) {
       settings.localise.empty() ? nullptr
                                 : openSessionToStartFrom(settings.localise, settings.out,
                                                          pnh.resolveName("localise"), true);
-  if (localise_in && config.pose.source == "auto") config.pose.source = "odometry";
+  const std::shared_ptr<const Session> continued =
+      settings.continue_from.empty() ? nullptr
+                                     : openSessionToStartFrom(settings.continue_from, settings.out,
+                                                              pnh.resolveName("continue"), false);
+  if ((localise_in || continued) && config.pose.source == "auto") config.pose.source = "odometry";
+  if (continued && !config.loop.enabled)
+    throw InputError(pnh.resolveName("continue") +
+                     ": goes on from the saved map with loop closure (its places and graph); "
+                     "loop/enabled=false turns it off");
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.
   ros::AsyncSpinner image_spinner(1);
@@ -97,10 +105,9 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.pose.source = resolvePoseSource(
       config.pose.source, topics.providesPoses(),
       "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
-  if (localise_in && !tracksKeyframes(config.pose, config.tracking))
-    throw InputError(pnh.resolveName("localise") +
-                     ": localising needs the camera's odometry (pose/source=odometry, "
-                     "tracking/method=dense)");
+  if ((localise_in || continued) && !tracksKeyframes(config.pose, config.tracking))
+    throw InputError(pnh.resolveName(localise_in ? "localise" : "continue") +
+                     ": needs the camera's odometry (pose/source=odometry, tracking/method=dense)");
   PipelineOutputs outputs =
       localise_in ? localisationOutputs(settings.out) : outputsBeside(settings.out);
   outputs.grid_path = settings.grid;
@@ -127,7 +134,9 @@ int runNode(RunControl& control, RunSignals& signals) {
   outputs.status_line = false;
   outputs.publisher = &publisher;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
-  Pipeline pipeline(config, std::move(source), outputs, localise_in);
+  Pipeline pipeline(
+      config, std::move(source), outputs, localise_in ? localise_in : continued,
+      localise_in ? Pipeline::SessionUse::kLocalise : Pipeline::SessionUse::kContinue);
 
   // Services on a queue and thread of their own: a call waits for its checkpoint without
   // holding up the image callbacks.
@@ -158,6 +167,13 @@ int runNode(RunControl& control, RunSignals& signals) {
     spdlog::info("localising in {}: publishing {} and TF {} -> {} in the saved map's frame",
                  settings.localise, pnh.resolveName("pose"), publish.map_frame,
                  publish.camera_frame);
+  else if (continued)
+    spdlog::info(
+        "continuing {}: publishing {}, {} and {}, TF {} -> {} (in the saved map's frame "
+        "once recognised); services {} and {}",
+        settings.continue_from, pnh.resolveName("map"), pnh.resolveName("grid"),
+        pnh.resolveName("pose"), publish.map_frame, publish.camera_frame, save_map.getService(),
+        snapshot.getService());
   else
     spdlog::info("mapping: publishing {}, {} and {}, TF {} -> {}; services {}, {} and {}",
                  pnh.resolveName("map"), pnh.resolveName("grid"), pnh.resolveName("pose"),

@@ -69,6 +69,16 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
                        ": nothing is mapped while localising (no ~grid or ~octomap)");
     s.octomap.clear();
   }
+  s.continue_from = stringParam(nh, "continue", "");
+  if (!s.continue_from.empty()) {
+    if (!s.localise.empty())
+      throw InputError("parameter " + nh.resolveName("continue") + ": localising (" +
+                       nh.resolveName("localise") + ") maps nothing to continue; give one");
+    if (nh.hasParam("octomap"))
+      throw InputError("parameter " + nh.resolveName("continue") +
+                       ": a session keeps no free space to go on from (no ~octomap)");
+    s.octomap.clear();
+  }
   return s;
 }
 
@@ -77,8 +87,8 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   std::vector<std::string> names;
   const std::string prefix = nh.getNamespace() + "/";
   const std::set<std::string> settings = {
-      "config",       "out",           "stats", "map_frame", "camera_frame",
-      "map_interval", "grid_interval", "grid",  "octomap",   "localise"};
+      "config",        "out",  "stats",   "map_frame", "camera_frame", "map_interval",
+      "grid_interval", "grid", "octomap", "localise",  "continue"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
@@ -92,7 +102,7 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
         throw InputError(
             "parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
             "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
-            "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, ~localise)");
+            "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, ~localise, ~continue)");
     }
   }
   for (const Key& key : config.keys()) {

@@ -309,6 +309,50 @@ TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
       << published.transpose() << " vs " << expected->translation().transpose();
 }
 
+TEST_F(RosNode, ContinuesASavedMapIntoOneMapAndSession) {
+  // The saved map: fr1/rpy mapped by the command line. The node continues it with fr1/xyz's bag
+  // (the same desk) and writes one map and one session of both.
+  std::string output;
+  ASSERT_EQ(run(binary() + " --rate max --no-render --viewer none --source tum:" + tumDir(kRpy) +
+                    " --out " + dir_ + "/map.pcd --set pose.source=odometry",
+                &output),
+            0)
+      << output;
+  const std::string map_before = readFile(dir_ + "/map.pcd");
+  const std::string node_log = dir_ + "/node.log";
+  Process node({nodeBinary(), "_out:=" + dir_ + "/more.pcd", "_stats:=" + dir_ + "/stats.json",
+                "_continue:=" + dir_ + "/map.session"},
+               node_log);
+  auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
+  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+  ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
+  node.signal(SIGINT);
+  // A sanitizer build drops most frames at the recorded rate: it may never recognise the map,
+  // which ends the run with exit 1 (said in the log) and its own map written.
+  const int code = node.wait(60);
+  const std::string log = readFile(node_log);
+  if (kRealTime)
+    ASSERT_EQ(code, 0) << log;
+  else
+    ASSERT_TRUE(code == 0 || (code == 1 && log.find("never recognised") != std::string::npos))
+        << log;
+  EXPECT_NE(log.find("continuing " + dir_ + "/map.session"), std::string::npos) << log;
+  EXPECT_EQ(readFile(dir_ + "/map.pcd"), map_before);
+  EXPECT_TRUE(std::filesystem::exists(dir_ + "/more.pcd")) << log;
+  expectEveryFrameAccountedFor(dir_ + "/stats.json", 32);
+  if (!kRealTime) return;
+  EXPECT_NE(log.find("continuing: keyframe"), std::string::npos) << log;
+  // One session of both runs: it holds the saved keyframes and the node's.
+  ASSERT_EQ(run(binary() + " session " + dir_ + "/more.session", &output), 0) << output;
+  std::string saved;
+  ASSERT_EQ(run(binary() + " session " + dir_ + "/map.session", &saved), 0) << saved;
+  const auto keyframes = [](const std::string& summary) {
+    const auto at = summary.find("pose graph: ");
+    return at == std::string::npos ? 0 : std::stoi(summary.substr(at + 12));
+  };
+  EXPECT_GT(keyframes(output), keyframes(saved)) << output << saved;
+}
+
 TEST_F(RosNode, BadParameterIsOneClearMessage) {
   const std::string log = dir_ + "/node.log";
   Process node({nodeBinary(), "_map/voxel_size:=-1"}, log);

@@ -22,6 +22,10 @@ struct NodeSettings {
   // ~localise: a saved session (MAP.session) to localise in instead of mapping: poses and TF in
   // its map's frame, nothing mapped ("" = map).
   std::string localise;
+  // ~continue: a saved session (MAP.session) to go on mapping from: the node maps in its own frame
+  // until it recognises a saved place, then in the saved map's, and ~out gets one map and one
+  // session of both ("" = map from nothing). No OctoMap (a session keeps no free space).
+  std::string continue_from;
 };
 
 NodeSettings readNodeSettings(const ros::NodeHandle& private_nh);
