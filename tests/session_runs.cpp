@@ -28,11 +28,12 @@ void mapTo(const std::string& sequence, const std::string& map) {
 namespace {
 
 SessionRun startFrom(const std::string& option, const std::string& sequence,
-                     const std::string& session, const std::string& out) {
+                     const std::string& session, const std::string& out,
+                     const std::string& options = "") {
   SessionRun result;
   result.code =
       run(binary() + " --source tum:" + sequence + " " + option + " " + session + " --out " + out +
-              ".pcd --rate max --no-render --viewer none --stats " + out + ".json",
+              ".pcd --rate max --no-render --viewer none --stats " + out + ".json " + options,
           &result.log);
   result.stats = readFile(out + ".json");
   // The statistics are JSON a reader takes (a separator once went missing between two entries).
@@ -51,8 +52,8 @@ SessionRun localise(const std::string& sequence, const std::string& session,
 }
 
 SessionRun continueFrom(const std::string& sequence, const std::string& session,
-                        const std::string& out) {
-  return startFrom("--continue", sequence, session, out);
+                        const std::string& out, const std::string& options) {
+  return startFrom("--continue", sequence, session, out, options);
 }
 
 std::string digest(const std::string& path) {

@@ -24,9 +24,10 @@ struct SessionRun {
 // extension).
 SessionRun localise(const std::string& sequence, const std::string& session,
                     const std::string& out);
-// `rgbdmap --continue session` over `sequence` (lossless), writing OUT.pcd, OUT.session, ...
+// `rgbdmap --continue session` over `sequence` (lossless), writing OUT.pcd, OUT.session, ...;
+// `options` are added to the command line.
 SessionRun continueFrom(const std::string& sequence, const std::string& session,
-                        const std::string& out);
+                        const std::string& out, const std::string& options = "");
 
 // A file's bytes, or a folder's (every file's name and bytes): to see that nothing changed.
 std::string digest(const std::string& path);

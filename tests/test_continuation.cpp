@@ -76,8 +76,12 @@ TEST(Continuation, ASavedMapNeverRecognisedLeavesTheRunsOwnMap) {
   const std::string dir = test::freshDir();
   test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
   const std::string orbit = test::sharedSynthetic("orbit_40", " --frames 40");
-  const test::SessionRun run = test::continueFrom(orbit, dir + "/map.session", dir + "/more");
+  // A checkpoint with every keyframe: none may write a session while the run is on its own.
+  const test::SessionRun run =
+      test::continueFrom(orbit, dir + "/map.session", dir + "/more",
+                         "--set checkpoint.every_keyframes=1 --set checkpoint.min_seconds=0");
   EXPECT_EQ(run.code, 1) << run.log;
+  EXPECT_GE(test::countOccurrences(run.log, "checkpoint: "), 3u) << run.log;
   EXPECT_NE(run.log.find("the saved map was never recognised"), std::string::npos) << run.log;
   EXPECT_GT(test::jsonNumber(run.stats, "keyframes_looked_for"), 0) << run.stats;
   EXPECT_EQ(test::jsonNumber(run.stats, "frames_unplaced"),

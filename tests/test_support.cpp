@@ -49,6 +49,14 @@ MapCloud loadMap(const std::string& path) {
   return cloud;
 }
 
+std::size_t countOccurrences(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos;
+       at = text.find(needle, at + needle.size()))
+    ++count;
+  return count;
+}
+
 double jsonNumber(const std::string& json, const std::string& key) {
   // Plain search, not <regex>: GCC 12 warns inside <regex> in sanitizer builds.
   const std::string quoted = "\"" + key + "\":";

@@ -44,6 +44,9 @@ class Process {
   bool reaped_ = false;
 };
 
+// How many times `needle` occurs in `text` (log lines of a kind).
+std::size_t countOccurrences(const std::string& text, const std::string& needle);
+
 std::string readFile(const std::string& path);
 // Polls `condition` until it holds (true) or `timeout_s` has passed (false): tests wait for
 // what they need to see, never for a fixed time.
