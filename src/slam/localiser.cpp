@@ -162,11 +162,7 @@ std::vector<int> Localiser::candidatesFor(const Eigen::Isometry3d& odometry, dou
 }
 
 bool Localiser::agree(const Placement& a, const Placement& b) const {
-  // Two placements of one odometry frame differ by the odometry's drift between them.
-  const double allowance = options_.drift_per_metre * std::abs(b.walked - a.walked);
-  const Eigen::Isometry3d change = a.odometry_in_map.inverse() * b.odometry_in_map;
-  return change.translation().norm() <= options_.consistent_translation + allowance &&
-         angle(change) <= options_.consistent_rotation + allowance;
+  return placementsAgree(a.odometry_in_map, b.odometry_in_map, b.walked - a.walked, options_);
 }
 
 void Localiser::accept(const Placement& placement) {

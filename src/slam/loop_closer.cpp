@@ -361,12 +361,10 @@ void LoopCloser::lookForSavedMap(int id) {
   // next one, which must put the run's frame in the same place, give or take the odometry's drift
   // between the two keyframes.
   if (placement_ && id - placement_->loop.later <= options_.consistency_keyframes) {
-    const Node& a = nodes_[static_cast<std::size_t>(placement_->loop.later)];
-    const Node& b = nodes_[static_cast<std::size_t>(id)];
-    const double allowance = options_.drift_per_metre * std::abs(b.walked - a.walked);
-    const Eigen::Isometry3d change = placement_->own_in_saved.inverse() * placement.own_in_saved;
-    if (change.translation().norm() <= options_.consistent_translation + allowance &&
-        angle(change) <= options_.consistent_rotation + allowance && join(*placement_, placement))
+    const double walked = nodes_[static_cast<std::size_t>(id)].walked -
+                          nodes_[static_cast<std::size_t>(placement_->loop.later)].walked;
+    if (placementsAgree(placement_->own_in_saved, placement.own_in_saved, walked, options_) &&
+        join(*placement_, placement))
       return;
   }
   placement_ = placement;

@@ -4,6 +4,9 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
+
+#include "rgbdmap/slam/loop_options.hpp"
 
 namespace rgbdmap {
 
@@ -21,6 +24,17 @@ inline double rotationAngle(const Eigen::Isometry3d& motion) {
 // The path a step adds, for the drift allowances that grow with it.
 inline double pathLength(const Eigen::Isometry3d& step) {
   return step.translation().norm() + kMetresPerRadian * rotationAngle(step);
+}
+
+// Whether two estimates of where one odometry frame lies in a saved map (each from a keyframe
+// recognised there) agree: within loop.consistent_*, plus the odometry's drift over the `walked`
+// metres between the two keyframes.
+inline bool placementsAgree(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double walked,
+                            const LoopOptions& loop) {
+  const double allowance = loop.drift_per_metre * std::abs(walked);
+  const Eigen::Isometry3d change = a.inverse() * b;
+  return change.translation().norm() <= loop.consistent_translation + allowance &&
+         rotationAngle(change) <= loop.consistent_rotation + allowance;
 }
 
 // The calling thread gives way to tracking and fusion when two cores are short (Linux: niceness
