@@ -151,6 +151,28 @@ class RosNode : public ::testing::Test {
     ros::shutdown();
     core_.reset();
   }
+  // Runs the node with `params` (and ~stats: dir_/stats.json) while fr1/xyz's bag plays at the
+  // recorded rate, stops it once it has gone quiet, and returns its log. A node started from a
+  // saved session: a sanitizer build drops most frames at the recorded rate and may never
+  // recognise the saved map, which ends the run with exit 1 (said in the log); a release build
+  // must exit 0.
+  std::string runNodeFromSavedMap(std::vector<std::string> params) {
+    const std::string node_log = dir_ + "/node.log";
+    params.insert(params.begin(), {nodeBinary(), "_stats:=" + dir_ + "/stats.json"});
+    Process node(params, node_log);
+    auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
+    EXPECT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+    EXPECT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
+    node.signal(SIGINT);
+    const int code = node.wait(60);
+    const std::string log = readFile(node_log);
+    if (kRealTime)
+      EXPECT_EQ(code, 0) << log;
+    else
+      EXPECT_TRUE(code == 0 || (code == 1 && log.find("never recognised") != std::string::npos))
+          << log;
+    return log;
+  }
   std::string dir_;
   std::unique_ptr<Roscore> core_;
   std::unique_ptr<ros::NodeHandle> nh_;
@@ -273,23 +295,9 @@ TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
         std::lock_guard<std::mutex> lock(mutex);
         last = *p;
       });
-  const std::string node_log = dir_ + "/node.log";
-  Process node({nodeBinary(), "_out:=" + dir_ + "/localised.pcd", "_stats:=" + dir_ + "/stats.json",
-                "_localise:=" + dir_ + "/map.session"},
-               node_log);
-  auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
-  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
-  ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
-  node.signal(SIGINT);
-  // A sanitizer build drops most frames at the recorded rate: it may never recognise the map,
-  // which ends the run with exit 1 (said in the log).
-  const int code = node.wait(60);
-  const std::string log = readFile(node_log);
-  if (kRealTime)
-    ASSERT_EQ(code, 0) << log;
-  else
-    ASSERT_TRUE(code == 0 || (code == 1 && log.find("never recognised") != std::string::npos))
-        << log;
+  const std::string log = runNodeFromSavedMap(
+      {"_out:=" + dir_ + "/localised.pcd", "_localise:=" + dir_ + "/map.session"});
+  if (HasFailure()) return;
   EXPECT_NE(log.find("localising in " + dir_ + "/map.session"), std::string::npos) << log;
   // Nothing mapped, the saved map as it was.
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/localised.pcd"));
@@ -319,23 +327,9 @@ TEST_F(RosNode, ContinuesASavedMapIntoOneMapAndSession) {
             0)
       << output;
   const std::string map_before = readFile(dir_ + "/map.pcd");
-  const std::string node_log = dir_ + "/node.log";
-  Process node({nodeBinary(), "_out:=" + dir_ + "/more.pcd", "_stats:=" + dir_ + "/stats.json",
-                "_continue:=" + dir_ + "/map.session"},
-               node_log);
-  auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
-  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
-  ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
-  node.signal(SIGINT);
-  // A sanitizer build drops most frames at the recorded rate: it may never recognise the map,
-  // which ends the run with exit 1 (said in the log) and its own map written.
-  const int code = node.wait(60);
-  const std::string log = readFile(node_log);
-  if (kRealTime)
-    ASSERT_EQ(code, 0) << log;
-  else
-    ASSERT_TRUE(code == 0 || (code == 1 && log.find("never recognised") != std::string::npos))
-        << log;
+  const std::string log =
+      runNodeFromSavedMap({"_out:=" + dir_ + "/more.pcd", "_continue:=" + dir_ + "/map.session"});
+  if (HasFailure()) return;
   EXPECT_NE(log.find("continuing " + dir_ + "/map.session"), std::string::npos) << log;
   EXPECT_EQ(readFile(dir_ + "/map.pcd"), map_before);
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/more.pcd")) << log;
