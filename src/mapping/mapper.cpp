@@ -118,8 +118,7 @@ bool Mapper::joinSaved(const PoseCorrections::Snapshot& correction) {
   return true;
 }
 
-bool Mapper::lagsCorrections() {
-  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+bool Mapper::lagsCorrections(const PoseCorrections::Snapshot& correction) {
   if (correction.version == checked_version_) return false;
   checked_version_ = correction.version;
   for (std::size_t i = 0; i < store_.size(); ++i) {
@@ -135,7 +134,8 @@ bool Mapper::refine(int keyframes) {
   if (!corrections_) return false;
   if (!refusing()) {
     // Joining a saved map takes in keyframes that are not in the TSDF at all: a pass in any case.
-    if (!joinSaved(corrections_->snapshot()) && !lagsCorrections()) return false;
+    const PoseCorrections::Snapshot latest = corrections_->snapshot();
+    if (!joinSaved(latest) && !lagsCorrections(latest)) return false;
     // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
     // while the pass fuses a new one in its place.
     auto cloud = std::make_shared<MapCloud>();

@@ -78,10 +78,8 @@ std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merg
     const Eigen::Isometry3d in_node =
         session.graph.keyframes[static_cast<std::size_t>(m.node)].pose.inverse() * in_session;
     m.target = found->earlier;
-    const Eigen::Isometry3d in_merged =
-        merged.graph.keyframes[static_cast<std::size_t>(m.target)].pose * found->later_in_earlier;
-    m.transform = in_merged * in_session.inverse();
-    m.transform.linear() = Eigen::Quaterniond(m.transform.linear()).normalized().toRotationMatrix();
+    m.transform = frameInSavedMap(merged.graph.keyframes[static_cast<std::size_t>(m.target)].pose,
+                                  found->later_in_earlier, in_session);
     m.measurement = found->later_in_earlier * in_node.inverse();
     m.information = found->information;
     m.inliers = found->inliers;

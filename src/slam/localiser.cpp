@@ -120,10 +120,9 @@ void Localiser::process(TrackedKeyframe& keyframe) {
     placement.keyframe = keyframe.id;
     placement.timestamp = keyframe.timestamp;
     placement.walked = walked_;
-    placement.odometry_in_map = saved_poses_[static_cast<std::size_t>(found->earlier)] *
-                                found->later_in_earlier * keyframe.pose.inverse();
-    placement.odometry_in_map.linear() =
-        Eigen::Quaterniond(placement.odometry_in_map.linear()).normalized().toRotationMatrix();
+    placement.odometry_in_map =
+        frameInSavedMap(saved_poses_[static_cast<std::size_t>(found->earlier)],
+                        found->later_in_earlier, keyframe.pose);
     const bool with_current = current_ && agree(*current_, placement);
     const bool with_candidate = candidate_ && agree(*candidate_, placement);
     if (with_current || with_candidate) {

@@ -65,7 +65,6 @@ void LoopCloser::restore(const Saved& saved) {
     }
   }
   first_own_ = static_cast<int>(n);
-  joined_ = false;
   last_closed_ = first_own_ - 1;
   stats_.place_bytes.store(places_.memoryBytes(), std::memory_order_relaxed);
   publish();
@@ -166,7 +165,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   node.timestamp = keyframe.timestamp;
   node.odometry = keyframe.pose;
   std::unique_lock<std::mutex> graph_lock(graph_mutex_);
-  if (id == 0 || (id == first_own_ && !joined_)) {
+  if (id == 0 || (id == first_own_ && !joined())) {
     // The world's first keyframe, or this run's first while it is not tied to the saved map:
     // held where odometry put it, so that its part of the graph has a frame of its own.
     graph_.addNode(keyframe.pose);
@@ -194,9 +193,9 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   keyframe.color.release();
   keyframe.depth.release();
   std::vector<LoopMeasurement> accepted;
-  const bool was_joined = joined_;
-  if (!joined_ && places_.described(id)) lookForSavedMap(id);
-  if (places_.described(id) && joined_ == was_joined) {
+  const bool was_joined = joined();
+  if (!was_joined && places_.described(id)) lookForSavedMap(id);
+  if (places_.described(id) && joined() == was_joined) {
     PlaceRecognition::Counts counts;
     const std::optional<LoopMeasurement> loop = places_.find(candidatesFor(id), counts);
     stats_.loop_candidates.fetch_add(static_cast<std::uint64_t>(counts.proposed));
@@ -236,7 +235,7 @@ std::vector<int> LoopCloser::candidatesFor(int id) const {
   const double walked = nodes_[static_cast<std::size_t>(id)].walked;
   std::vector<std::pair<double, int>> near;
   // Until the run joins a saved map, its own keyframes only: the saved ones are in another frame.
-  for (int j = joined_ ? 0 : first_own_; j + options_.recent_keyframes < id; ++j) {
+  for (int j = joined() ? 0 : first_own_; j + options_.recent_keyframes < id; ++j) {
     if (!places_.described(j)) continue;
     const Eigen::Isometry3d xj = graph_.pose(j);
     // (A saved keyframe may be further along the path than this run's: its walk came first.)
@@ -257,7 +256,7 @@ std::vector<int> LoopCloser::candidatesFor(int id) const {
 
 bool LoopCloser::nearRememberedPlace(int id) const {
   const Eigen::Isometry3d x = graph_.pose(id);
-  for (int j = joined_ ? 0 : first_own_; j < id; ++j) {
+  for (int j = joined() ? 0 : first_own_; j < id; ++j) {
     if (!places_.described(j)) continue;
     const Eigen::Isometry3d relative = graph_.pose(j).inverse() * x;
     if (relative.translation().norm() < options_.place_spacing &&
@@ -304,9 +303,7 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   const PoseGraph::Summary summary = graph_.optimise(100, first_free);
   stats_.optimise_latency.record(summary.seconds);
   bool consistent = summary.usable;
-  double worst = 0.0;
-  for (std::size_t i = graph_.edges().size() - loops.size(); i < graph_.edges().size(); ++i)
-    worst = std::max(worst, graph_.whitenedError(graph_.edges()[i]));
+  const double worst = graph_.worstWhitenedError(loops.size());
   consistent = consistent && worst <= options_.max_loop_residual;
   if (!consistent) {
     // The rest of the graph disagrees with these loops: not the same place after all.
@@ -342,7 +339,7 @@ void LoopCloser::publish() {
   PoseCorrections::Table table(nodes_.size());
   for (std::size_t i = 0; i < nodes_.size(); ++i)
     table[i] = graph_.pose(static_cast<int>(i)) * nodes_[i].odometry.inverse();
-  corrections_.publish(std::move(table), first_own_, joined_);
+  corrections_.publish(std::move(table), first_own_, joined());
 }
 
 void LoopCloser::lookForSavedMap(int id) {
@@ -353,9 +350,7 @@ void LoopCloser::lookForSavedMap(int id) {
   Placement placement;
   placement.loop = *found;
   placement.own_in_saved =
-      graph_.pose(found->earlier) * found->later_in_earlier * graph_.pose(id).inverse();
-  placement.own_in_saved.linear() =
-      Eigen::Quaterniond(placement.own_in_saved.linear()).normalized().toRotationMatrix();
+      frameInSavedMap(graph_.pose(found->earlier), found->later_in_earlier, graph_.pose(id));
   stats_.keyframes_placed.fetch_add(1, std::memory_order_relaxed);
   // A place that looks alike elsewhere rarely passes twice: the first placement waits for the
   // next one, which must put the run's frame in the same place, give or take the odometry's drift
@@ -383,9 +378,7 @@ bool LoopCloser::join(const Placement& first, const Placement& second) {
                           p->loop.information, true));
   const PoseGraph::Summary summary = graph_.optimise(100, first_own_);
   stats_.optimise_latency.record(summary.seconds);
-  double worst = 0.0;
-  for (std::size_t i = graph_.edges().size() - 2; i < graph_.edges().size(); ++i)
-    worst = std::max(worst, graph_.whitenedError(graph_.edges()[i]));
+  const double worst = graph_.worstWhitenedError(2);
   if (!summary.usable || worst > options_.max_loop_residual) {
     graph_.rollBack(before);
     graph_.hold(first_own_, true);
@@ -396,7 +389,7 @@ bool LoopCloser::join(const Placement& first, const Placement& second) {
         first.loop.later, second.loop.later, worst);
     return false;
   }
-  joined_ = true;
+  joined_at_.store(second.loop.later);
   // Drift allowances between the two parts count along the path from where they met.
   const double shift = nodes_[static_cast<std::size_t>(second.loop.earlier)].walked -
                        nodes_[static_cast<std::size_t>(second.loop.later)].walked;
@@ -407,7 +400,6 @@ bool LoopCloser::join(const Placement& first, const Placement& second) {
   placement_.reset();
   pending_.clear();  // loops of the run's own frame, before it moved
   stats_.loops_accepted.fetch_add(2);
-  joined_at_.store(second.loop.later);
   const Node& own = nodes_[static_cast<std::size_t>(second.loop.later)];
   const Node& saved = nodes_[static_cast<std::size_t>(second.loop.earlier)];
   spdlog::info(

@@ -97,6 +97,13 @@ double PoseGraph::whitenedError(const Edge& edge) const {
   return (edge.sqrt_information * edgeError(edge.measurement, a.t, a.q, b.t, b.q)).norm();
 }
 
+double PoseGraph::worstWhitenedError(std::size_t count) const {
+  double worst = 0.0;
+  for (std::size_t i = edges_.size() - std::min(count, edges_.size()); i < edges_.size(); ++i)
+    worst = std::max(worst, whitenedError(edges_[i]));
+  return worst;
+}
+
 PoseGraph::Matrix6d PoseGraph::sqrtInformation(const Matrix6d& information) {
   const Matrix6d symmetric = 0.5 * (information + information.transpose());
   Eigen::SelfAdjointEigenSolver<Matrix6d> eig(symmetric);

@@ -88,8 +88,9 @@ class Mapper {
  private:
   Eigen::Isometry3d corrected(const PoseCorrections::Snapshot& correction, std::int64_t anchor,
                               const Eigen::Isometry3d& pose) const;
-  // Whether a kept keyframe's corrected pose has moved by refusion_shift from where it was fused.
-  bool lagsCorrections();
+  // Whether a kept keyframe's corrected pose (by `correction`, the latest) has moved by
+  // refusion_shift from where it was fused.
+  bool lagsCorrections(const PoseCorrections::Snapshot& correction);
   // Takes in the saved keyframes once the run has joined their frame; returns whether it did.
   bool joinSaved(const PoseCorrections::Snapshot& correction);
   bool refusing() const { return shown_ != nullptr; }

@@ -110,6 +110,8 @@ class LoopCloser : public KeyframeSink {
   // map once two placements agree.
   void lookForSavedMap(int id);
   bool join(const Placement& first, const Placement& second);
+  // One graph in one frame: an ordinary run, or a continued one that has joined the saved map.
+  bool joined() const { return first_own_ == 0 || joined_at_.load() >= 0; }
   std::vector<int> candidatesFor(int id) const;
   // Whether an earlier keyframe kept as a place is within loop.place_spacing of `id`.
   bool nearRememberedPlace(int id) const;
@@ -136,7 +138,6 @@ class LoopCloser : public KeyframeSink {
   // Continuing: the saved keyframes are 0..first_own_-1; until joined, the run's own part is
   // held at its first keyframe, and only the saved places are searched for it.
   int first_own_ = 0;
-  bool joined_ = true;
   std::vector<int> saved_places_;
   std::optional<Placement> placement_;  // waiting for a second that agrees
   std::atomic<std::int64_t> joined_at_{-1};

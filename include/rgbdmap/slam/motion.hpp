@@ -26,6 +26,17 @@ inline double pathLength(const Eigen::Isometry3d& step) {
   return step.translation().norm() + kMetresPerRadian * rotationAngle(step);
 }
 
+// Where a run's frame lies in a saved map's, from one of its keyframes (at `own` in the run's
+// frame) recognised at a saved keyframe (at `saved`), which sees it at `later_in_earlier`; the
+// rotation re-orthonormalised (a product of three poses).
+inline Eigen::Isometry3d frameInSavedMap(const Eigen::Isometry3d& saved,
+                                         const Eigen::Isometry3d& later_in_earlier,
+                                         const Eigen::Isometry3d& own) {
+  Eigen::Isometry3d frame = saved * later_in_earlier * own.inverse();
+  frame.linear() = Eigen::Quaterniond(frame.linear()).normalized().toRotationMatrix();
+  return frame;
+}
+
 // Whether two estimates of where one odometry frame lies in a saved map (each from a keyframe
 // recognised there) agree: within loop.consistent_*, plus the odometry's drift over the `walked`
 // metres between the two keyframes.

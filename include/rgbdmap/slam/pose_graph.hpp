@@ -59,6 +59,8 @@ class PoseGraph {
   const std::deque<Edge>& edges() const { return edges_; }
   // |whitened error| of an edge at the current estimates.
   double whitenedError(const Edge& edge) const;
+  // The largest of the last `count` edges' (loops just added: does the graph agree with them?).
+  double worstWhitenedError(std::size_t count) const;
 
   // Square root of an information matrix (symmetrised, with a small floor on its eigenvalues
   // so a direction the measurement says nothing about does not make the problem singular).
