@@ -360,6 +360,23 @@ TEST_F(RosNode, BadParameterIsOneClearMessage) {
   EXPECT_EQ(node2.wait(60), 2) << readFile(log2);
   EXPECT_NE(readFile(log2).find("parameter /mapper/map/voxel_sise: unknown"), std::string::npos)
       << readFile(log2);
+  // A saved session to continue: not with ~localise or ~octomap, and one that is there. (Each
+  // node under a name of its own: parameters stay on the master.)
+  const auto refused = [&](const std::string& name, const std::vector<std::string>& params,
+                           const std::string& message) {
+    const std::string log3 = dir_ + "/" + name + ".log";
+    std::vector<std::string> args{nodeBinary(), "__name:=" + name};
+    args.insert(args.end(), params.begin(), params.end());
+    Process node3(args, log3);
+    EXPECT_EQ(node3.wait(60), 2) << readFile(log3);
+    EXPECT_NE(readFile(log3).find(message), std::string::npos) << readFile(log3);
+  };
+  const std::string session = dir_ + "/saved.session";
+  refused("both", {"_continue:=" + session, "_localise:=" + session},
+          "parameter /both/continue: localising (/both/localise) maps nothing to continue");
+  refused("octomap", {"_continue:=" + session, "_octomap:=" + dir_ + "/m.bt"},
+          "parameter /octomap/continue: a session keeps no free space to go on from");
+  refused("missing", {"_continue:=" + session, "_out:=" + dir_ + "/more.pcd"}, session);
 }
 
 TEST_F(RosNode, UnsupportedEncodingIsOneClearMessage) {
