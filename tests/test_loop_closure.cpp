@@ -55,7 +55,7 @@ DriftedLoop driftedLoop(int n) {
     PoseGraph::Edge edge;
     edge.from = i - 1;
     edge.to = i;
-    edge.measurement = step;
+    edge.setMeasurement(step);
     loop.steps.push_back(edge);
   }
   return loop;
@@ -94,8 +94,8 @@ TEST(PoseGraph, LoopEdgePullsTheDriftedLapShut) {
   PoseGraph::Edge closure;
   closure.from = 0;
   closure.to = 39;
-  closure.measurement = loop.truth[0].inverse() * loop.truth[39];
-  closure.sqrt_information = 10.0 * PoseGraph::Matrix6d::Identity();
+  closure.setMeasurement(loop.truth[0].inverse() * loop.truth[39]);
+  closure.setSqrtInformation(10.0 * PoseGraph::Matrix6d::Identity());
   closure.loop = true;
   graph.addEdge(closure);
   EXPECT_GT(graph.whitenedError(closure), 1.0);
@@ -122,22 +122,22 @@ TEST(PoseGraph, AWindowOfTheNewestKeyframesIsPulledOntoTheOldLap) {
     // Lap 1: closed already (its edges as measured after correction: exact).
     for (const auto& p : loop.truth) graph.addNode(p);
     for (PoseGraph::Edge e : loop.steps) {
-      e.measurement = loop.truth[e.from].inverse() * loop.truth[e.to];
+      e.setMeasurement(loop.truth[e.from].inverse() * loop.truth[e.to]);
       graph.addEdge(e);
     }
     // Lap 2 starts where lap 1 did and drifts like it.
     for (int i = 0; i < 40; ++i) {
-      graph.addNode(i == 0 ? loop.truth[0] : graph.pose(39 + i) * loop.steps[i - 1].measurement);
+      graph.addNode(i == 0 ? loop.truth[0] : graph.pose(39 + i) * loop.steps[i - 1].measurement());
       PoseGraph::Edge step;
       step.from = 39 + i;
       step.to = 40 + i;
-      step.measurement = i == 0 ? loop.truth[39].inverse() * loop.truth[0]
-                                : loop.steps[static_cast<std::size_t>(i - 1)].measurement;
+      step.setMeasurement(i == 0 ? loop.truth[39].inverse() * loop.truth[0]
+                                 : loop.steps[static_cast<std::size_t>(i - 1)].measurement());
       graph.addEdge(step);
       PoseGraph::Edge closure;  // lap 2's keyframe i is lap 1's keyframe i
       closure.from = i;
       closure.to = 40 + i;
-      closure.sqrt_information = 10.0 * PoseGraph::Matrix6d::Identity();
+      closure.setSqrtInformation(10.0 * PoseGraph::Matrix6d::Identity());
       closure.loop = true;
       graph.addEdge(closure);
     }
@@ -168,7 +168,7 @@ TEST(PoseGraph, RemovingTheLoopEdgeRestoresOdometry) {
   PoseGraph::Edge closure;
   closure.from = 0;
   closure.to = 19;
-  closure.measurement = loop.truth[0].inverse() * loop.truth[19];
+  closure.setMeasurement(loop.truth[0].inverse() * loop.truth[19]);
   closure.loop = true;
   graph.addEdge(closure);
   graph.removeLastEdges(1);
@@ -186,6 +186,31 @@ TEST(PoseGraph, SqrtInformationIsARootAndNeverSingular) {
   Eigen::SelfAdjointEigenSolver<PoseGraph::Matrix6d> solver(back);
   EXPECT_GT(solver.eigenvalues().minCoeff(), 0.0);
   EXPECT_TRUE(root.allFinite());
+  EXPECT_TRUE(root.triangularView<Eigen::StrictlyLower>().toDenseMatrix().isZero(0));
+}
+
+TEST(PoseGraph, AnEdgeKeepsItsWeightAsAnUpperTriangle) {
+  PoseGraph::Edge edge;
+  EXPECT_EQ(edge.sqrtInformation(), PoseGraph::Matrix6d::Identity());
+  // Any square root is kept as the triangular one with the same information (a session from
+  // before edges were stored this way holds another).
+  PoseGraph::Matrix6d information;
+  information << 400, 10, 0, 0, 5, 0, 10, 300, 0, 0, 0, 0, 0, 0, 100, 0, 0, 0, 0, 0, 0, 2500, 0, 0,
+      5, 0, 0, 0, 2500, 30, 0, 0, 0, 0, 30, 900;
+  Eigen::SelfAdjointEigenSolver<PoseGraph::Matrix6d> eig(information);
+  const PoseGraph::Matrix6d general =
+      eig.eigenvalues().cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
+  edge.setSqrtInformation(general);
+  const PoseGraph::Matrix6d kept = edge.sqrtInformation();
+  EXPECT_TRUE(kept.triangularView<Eigen::StrictlyLower>().toDenseMatrix().isZero(0));
+  EXPECT_LT((kept.transpose() * kept - information).norm(), 1e-3 * information.norm());
+  // Set again from what it gives: the same bits (a session read and written again).
+  PoseGraph::Edge again;
+  again.setSqrtInformation(kept);
+  EXPECT_EQ(again.sqrtInformation(), kept);
+  const Eigen::Isometry3d motion = pose(0.3, -0.2, 1.5, 0.4);
+  edge.setMeasurement(motion);
+  EXPECT_TRUE(edge.measurement().isApprox(motion, 1e-15));
 }
 
 TEST(PoseCorrections, AnchoredPosesFollowTheirKeyframe) {

@@ -66,8 +66,9 @@ void putGraph(const Graph& graph, RecordWriter& out, SessionSummary& summary) {
     out.put<std::int32_t>(e.from);
     out.put<std::int32_t>(e.to);
     out.put<std::uint8_t>(e.loop ? 1 : 0);
-    putPose(out, e.measurement);
-    for (int i = 0; i < 36; ++i) out.put<double>(e.sqrt_information.data()[i]);
+    putPose(out, e.measurement());
+    const PoseGraph::Matrix6d sqrt_information = e.sqrtInformation();
+    for (int i = 0; i < 36; ++i) out.put<double>(sqrt_information.data()[i]);
     summary.loop_edges += e.loop ? 1 : 0;
   }
 }
@@ -113,8 +114,11 @@ void readGraph(BinaryReader in, Session& s) {
     e.from = in.get<std::int32_t>();
     e.to = in.get<std::int32_t>();
     e.loop = in.get<std::uint8_t>() != 0;
-    e.measurement = getPose(in);
-    for (int i = 0; i < 36; ++i) e.sqrt_information.data()[i] = in.get<double>();
+    e.setMeasurement(getPose(in));
+    PoseGraph::Matrix6d sqrt_information;
+    for (int i = 0; i < 36; ++i) sqrt_information.data()[i] = in.get<double>();
+    if (!sqrt_information.allFinite()) in.fail("corrupt (an edge's weight is not a number)");
+    e.setSqrtInformation(sqrt_information);
     if (e.from < 0 || e.to < 0 || static_cast<std::size_t>(e.from) >= keyframes ||
         static_cast<std::size_t>(e.to) >= keyframes)
       in.fail("corrupt (an edge " + std::to_string(e.from) + " -> " + std::to_string(e.to) +
@@ -131,6 +135,7 @@ void writePlaces(const Session& s, RecordWriter& out, SessionSummary& summary) {
   const auto& places = s.live_graph ? live : s.graph.places;
   const std::size_t count = std::min(places.size(), summary.keyframes);
   out.put<std::uint64_t>(count);
+  AlignmentReference reference;
   for (std::size_t id = 0; id < count; ++id) {
     const auto& place = places[id];
     out.put<std::uint8_t>(place ? 1 : 0);
@@ -143,7 +148,9 @@ void writePlaces(const Session& s, RecordWriter& out, SessionSummary& summary) {
         view.descriptors.isContinuous() ? view.descriptors : view.descriptors.clone();
     out.put<std::uint64_t>(static_cast<std::uint64_t>(descriptors.rows));
     if (descriptors.rows > 0) out.putBytes(descriptors.data, descriptors.total());
-    const AlignmentReference& reference = place->reference;
+    // Expanded as the aligner takes it (the file keeps the format it had before places were
+    // packed in memory; packing again gives the same points).
+    place->reference.expand(reference);
     out.put<std::int32_t>(reference.valid_pixels);
     out.put<std::uint64_t>(reference.levels.size());
     for (const AlignmentReference::Level& level : reference.levels) {
@@ -175,7 +182,7 @@ void readPlaces(BinaryReader in, Session& s) {
     view.descriptors.create(static_cast<int>(rows), kDescriptorBytes, CV_8UC1);
     if (rows > 0) in.getBytes(view.descriptors.data, rows * kDescriptorBytes);
     view.described = true;
-    AlignmentReference& reference = place->reference;
+    AlignmentReference reference;
     reference.valid_pixels = in.get<std::int32_t>();
     reference.levels.resize(in.count(sizeof(LevelCamera)));
     for (AlignmentReference::Level& level : reference.levels) {
@@ -183,6 +190,7 @@ void readPlaces(BinaryReader in, Session& s) {
       level.points.resize(in.count(sizeof(Eigen::Vector4f)));
       in.getBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
     }
+    place->reference = PackedReference::pack(reference);
     slot = std::move(place);
   }
   if (!in.atEnd()) in.fail("corrupt (bytes after the places)");

@@ -116,8 +116,8 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
     PoseGraph::Edge e;
     e.from = m.target;
     e.to = id(m.node);
-    e.measurement = m.measurement;
-    e.sqrt_information = PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels);
+    e.setMeasurement(m.measurement);
+    e.setSqrtInformation(PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels));
     e.loop = true;
     return e;
   };

@@ -54,7 +54,7 @@ void LoopCloser::restore(const Saved& saved) {
     node.timestamp = saved.keyframes[i].timestamp;
     node.odometry = saved.keyframes[i].odometry;
     if (const PoseGraph::Edge* e = odometry[i])
-      node.walked = nodes_[static_cast<std::size_t>(e->from)].walked + pathLength(e->measurement);
+      node.walked = nodes_[static_cast<std::size_t>(e->from)].walked + pathLength(e->measurement());
     else if (i > 0)
       node.walked = nodes_.back().walked;
     nodes_.push_back(node);
@@ -144,14 +144,14 @@ PoseGraph::Edge LoopCloser::edgeOf(int from, int to, const Eigen::Isometry3d& me
   PoseGraph::Edge edge;
   edge.from = from;
   edge.to = to;
-  edge.measurement = measurement;
+  edge.setMeasurement(measurement);
   edge.loop = loop;
   if (information.allFinite() && information.trace() > 0.0) {
-    edge.sqrt_information = PoseGraph::sqrtInformation(information * options_.edge_pixels);
+    edge.setSqrtInformation(PoseGraph::sqrtInformation(information * options_.edge_pixels));
   } else {
     // No alignment behind it (a keyframe the tracker could not relate): a weak tie of 10 cm
     // and 0.1 rad, so the graph stays connected without trusting it.
-    edge.sqrt_information = Eigen::Matrix<double, 6, 6>::Identity() * 10.0;
+    edge.setSqrtInformation(Eigen::Matrix<double, 6, 6>::Identity() * 10.0);
   }
   return edge;
 }

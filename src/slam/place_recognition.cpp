@@ -55,8 +55,9 @@ void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
   frame.timestamp = keyframe.timestamp;
   pyramid_.build(frame, camera_, tracking_.coarsest_level + 1, tracking_.finest_level,
                  tracking_.undistort, min_depth_, max_depth_);
-  entry.reference.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,
-                        static_cast<float>(tracking_.min_gradient));
+  reference_.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,
+                   static_cast<float>(tracking_.min_gradient));
+  entry.reference = PackedReference::pack(reference_);
   features_.prepare(frame);
   features_.describePrepared(keyframe.depth, entry.view);
   std::lock_guard<std::mutex> lock(entries_mutex_);
@@ -94,7 +95,8 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
     // Only places the camera has really been back to: two views of one wall from a metre apart
     // are not a loop, even when they agree.
     if (!found || found->translation().norm() > options_.max_distance) continue;
-    const AlignmentResult dense = aligner_.align(earlier.reference, pyramid_, *found);
+    earlier.reference.expand(reference_);
+    const AlignmentResult dense = aligner_.align(reference_, pyramid_, *found);
     if (!dense.finite || dense.overlap < options_.min_overlap ||
         dense.intensity_sigma > tracking_.max_residual)
       continue;
@@ -126,7 +128,7 @@ std::size_t PlaceRecognition::memoryBytes() const {
     const Place& e = *entry;
     bytes += sizeof(Place) + e.view.descriptors.total() * e.view.descriptors.elemSize();
     bytes += e.view.points.size() * sizeof(cv::Point3f);
-    for (const auto& level : e.reference.levels) bytes += level.points.size() * 16;
+    bytes += e.reference.memoryBytes();
   }
   return bytes;
 }

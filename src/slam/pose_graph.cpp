@@ -94,7 +94,7 @@ Eigen::Isometry3d PoseGraph::pose(int node) const {
 double PoseGraph::whitenedError(const Edge& edge) const {
   const Node& a = nodes_[static_cast<std::size_t>(edge.from)];
   const Node& b = nodes_[static_cast<std::size_t>(edge.to)];
-  return (edge.sqrt_information * edgeError(edge.measurement, a.t, a.q, b.t, b.q)).norm();
+  return (edge.sqrtInformation() * edgeError(edge.measurement(), a.t, a.q, b.t, b.q)).norm();
 }
 
 double PoseGraph::worstWhitenedError(std::size_t count) const {
@@ -109,8 +109,42 @@ PoseGraph::Matrix6d PoseGraph::sqrtInformation(const Matrix6d& information) {
   Eigen::SelfAdjointEigenSolver<Matrix6d> eig(symmetric);
   Eigen::Matrix<double, 6, 1> values = eig.eigenvalues();
   const double floor = std::max(1e-9, 1e-6 * values.maxCoeff());
-  for (int i = 0; i < 6; ++i) values[i] = std::sqrt(std::max(values[i], floor));
-  return values.asDiagonal() * eig.eigenvectors().transpose();
+  for (int i = 0; i < 6; ++i) values[i] = std::max(values[i], floor);
+  const Matrix6d floored =
+      eig.eigenvectors() * values.asDiagonal() * eig.eigenvectors().transpose();
+  return upperSquareRoot(0.5 * (floored + floored.transpose()));
+}
+
+PoseGraph::Matrix6d PoseGraph::upperSquareRoot(const Matrix6d& information) {
+  return information.llt().matrixU();
+}
+
+Eigen::Isometry3d PoseGraph::Edge::measurement() const {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.matrix().topRows<3>() = measurement_;
+  return out;
+}
+
+void PoseGraph::Edge::setMeasurement(const Eigen::Isometry3d& measurement) {
+  measurement_ = measurement.matrix().topRows<3>();
+}
+
+PoseGraph::Matrix6d PoseGraph::Edge::sqrtInformation() const {
+  Matrix6d out = Matrix6d::Zero();
+  std::size_t k = 0;
+  for (int r = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c) out(r, c) = sqrt_information_[k++];
+  return out;
+}
+
+void PoseGraph::Edge::setSqrtInformation(const Matrix6d& sqrt_information) {
+  const bool upper =
+      sqrt_information.triangularView<Eigen::StrictlyLower>().toDenseMatrix().isZero(0);
+  const Matrix6d u =
+      upper ? sqrt_information : upperSquareRoot(sqrt_information.transpose() * sqrt_information);
+  std::size_t k = 0;
+  for (int r = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c) sqrt_information_[k++] = static_cast<float>(u(r, c));
 }
 
 PoseGraph::Summary PoseGraph::optimise(int max_iterations, int first_free) {
@@ -131,7 +165,7 @@ PoseGraph::Summary PoseGraph::optimise(int max_iterations, int first_free) {
     Node& a = nodes_[static_cast<std::size_t>(e.from)];
     Node& b = nodes_[static_cast<std::size_t>(e.to)];
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
-        new RelativePoseCost{e.measurement, e.sqrt_information});
+        new RelativePoseCost{e.measurement(), e.sqrtInformation()});
     problem.AddResidualBlock(cost, nullptr, a.t, a.q, b.t, b.q);
   }
   for (std::size_t i = 0; i < nodes_.size(); ++i) {

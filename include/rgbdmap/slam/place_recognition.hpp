@@ -11,6 +11,7 @@
 #include "rgbdmap/tracking/dense_aligner.hpp"
 #include "rgbdmap/tracking/image_pyramid.hpp"
 #include "rgbdmap/tracking/keyframe_sink.hpp"
+#include "rgbdmap/tracking/packed_reference.hpp"
 #include "rgbdmap/tracking/relocaliser.hpp"
 #include "rgbdmap/tracking/tracking_options.hpp"
 
@@ -34,10 +35,11 @@ struct LoopMeasurement {
 class PlaceRecognition {
  public:
   // What a keyframe is recognised by: its ORB features with their 3-D points, and its dense
-  // alignment reference. Never changed once added (a saved session shares them).
+  // alignment reference (packed: kept as long as the place). Never changed once added (a saved
+  // session shares them).
   struct Place {
     RelocalisationView view;
-    AlignmentReference reference;
+    PackedReference reference;
   };
   struct Counts {
     int proposed = 0;  // looked alike (enough ORB matches)
@@ -72,7 +74,8 @@ class PlaceRecognition {
   float min_depth_, max_depth_;
   Relocaliser features_;
   DenseAligner aligner_;
-  ImagePyramid pyramid_;  // of the newest keyframe
+  ImagePyramid pyramid_;          // of the newest keyframe
+  AlignmentReference reference_;  // scratch: a place's reference, built or expanded
   // By keyframe id; null for a keyframe not described or forgotten. Pointers, so that growing
   // the table never copies the places (tens of MB in a long run).
   // Written on the caller's (loop) thread only, under `entries_mutex_` for places().

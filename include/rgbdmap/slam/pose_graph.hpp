@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <array>
 #include <deque>
 #include <vector>
 
@@ -15,11 +16,27 @@ namespace rgbdmap {
 class PoseGraph {
  public:
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
-  struct Edge {
+  // 192 bytes instead of 432: a patrol adds one or two a keyframe for as long as it runs. The
+  // measurement's top three rows; the square root of the information as an upper triangle in
+  // floats (a weight: a float's precision is plenty, and the bits read back are the bits
+  // written).
+  class Edge {
+   public:
     int from = 0, to = 0;
-    Eigen::Isometry3d measurement = Eigen::Isometry3d::Identity();  // X_from^-1 * X_to
-    Matrix6d sqrt_information = Matrix6d::Identity();
     bool loop = false;
+
+    Eigen::Isometry3d measurement() const;  // X_from^-1 * X_to
+    void setMeasurement(const Eigen::Isometry3d& measurement);
+    // Upper triangular: any square root S of the information (S^T S) is stored as the one
+    // with the same S^T S that is (its Cholesky factor).
+    Matrix6d sqrtInformation() const;
+    void setSqrtInformation(const Matrix6d& sqrt_information);
+
+   private:
+    Eigen::Matrix<double, 3, 4> measurement_ = Eigen::Matrix<double, 3, 4>::Identity();
+    // Row by row, from the diagonal on; the identity until set.
+    std::array<float, 21> sqrt_information_{1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0,
+                                            1, 0, 0, 0, 1, 0, 0, 1, 0, 1};
   };
   struct Node {
     double t[3];
@@ -62,11 +79,15 @@ class PoseGraph {
   // The largest of the last `count` edges' (loops just added: does the graph agree with them?).
   double worstWhitenedError(std::size_t count) const;
 
-  // Square root of an information matrix (symmetrised, with a small floor on its eigenvalues
-  // so a direction the measurement says nothing about does not make the problem singular).
+  // Square root of an information matrix, upper triangular (symmetrised, with a small floor on
+  // its eigenvalues so a direction the measurement says nothing about does not make the problem
+  // singular).
   static Matrix6d sqrtInformation(const Matrix6d& information);
 
  private:
+  // The upper triangular U with U^T U = information (positive definite).
+  static Matrix6d upperSquareRoot(const Matrix6d& information);
+
   std::vector<Node> nodes_;
   std::deque<Edge> edges_;
   std::vector<int> held_;
