@@ -112,11 +112,7 @@ PoseGraph::Matrix6d PoseGraph::sqrtInformation(const Matrix6d& information) {
   for (int i = 0; i < 6; ++i) values[i] = std::max(values[i], floor);
   const Matrix6d floored =
       eig.eigenvectors() * values.asDiagonal() * eig.eigenvectors().transpose();
-  return upperSquareRoot(0.5 * (floored + floored.transpose()));
-}
-
-PoseGraph::Matrix6d PoseGraph::upperSquareRoot(const Matrix6d& information) {
-  return information.llt().matrixU();
+  return Matrix6d((0.5 * (floored + floored.transpose())).llt().matrixU());
 }
 
 Eigen::Isometry3d PoseGraph::Edge::measurement() const {
@@ -141,7 +137,8 @@ void PoseGraph::Edge::setSqrtInformation(const Matrix6d& sqrt_information) {
   const bool upper =
       sqrt_information.triangularView<Eigen::StrictlyLower>().toDenseMatrix().isZero(0);
   const Matrix6d u =
-      upper ? sqrt_information : upperSquareRoot(sqrt_information.transpose() * sqrt_information);
+      upper ? sqrt_information
+            : PoseGraph::sqrtInformation(sqrt_information.transpose() * sqrt_information);
   std::size_t k = 0;
   for (int r = 0; r < 6; ++r)
     for (int c = r; c < 6; ++c) sqrt_information_[k++] = static_cast<float>(u(r, c));

@@ -85,9 +85,6 @@ class PoseGraph {
   static Matrix6d sqrtInformation(const Matrix6d& information);
 
  private:
-  // The upper triangular U with U^T U = information (positive definite).
-  static Matrix6d upperSquareRoot(const Matrix6d& information);
-
   std::vector<Node> nodes_;
   std::deque<Edge> edges_;
   std::vector<int> held_;
