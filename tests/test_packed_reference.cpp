@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <random>
 
@@ -53,9 +52,10 @@ TEST(PackedReference, KeepsEveryPointWithinATenthOfAMillimetreInHalfTheMemory) {
   const PackedReference again = PackedReference::pack(expanded);
   for (std::size_t l = 0; l < 3; ++l) {
     ASSERT_EQ(again.levels[l].points.size(), packed.levels[l].points.size());
-    EXPECT_EQ(std::memcmp(again.levels[l].points.data(), packed.levels[l].points.data(),
-                          packed.levels[l].points.size() * sizeof(PackedReference::Point)),
-              0);
+    for (std::size_t i = 0; i < packed.levels[l].points.size(); ++i) {
+      const PackedReference::Point &a = again.levels[l].points[i], &b = packed.levels[l].points[i];
+      EXPECT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z && a.intensity == b.intensity);
+    }
   }
 }
 
