@@ -169,6 +169,7 @@ void readPlaces(BinaryReader in, Session& s) {
     in.fail("corrupt (" + std::to_string(count) + " places for " +
             std::to_string(s.graph.keyframes.size()) + " keyframes)");
   s.graph.places.resize(count);
+  AlignmentReference reference;  // as read, before packing (its buffers serve every place)
   for (auto& slot : s.graph.places) {
     if (in.get<std::uint8_t>() == 0) continue;
     auto place = std::make_shared<PlaceRecognition::Place>();
@@ -182,7 +183,6 @@ void readPlaces(BinaryReader in, Session& s) {
     view.descriptors.create(static_cast<int>(rows), kDescriptorBytes, CV_8UC1);
     if (rows > 0) in.getBytes(view.descriptors.data, rows * kDescriptorBytes);
     view.described = true;
-    AlignmentReference reference;
     reference.valid_pixels = in.get<std::int32_t>();
     reference.levels.resize(in.count(sizeof(LevelCamera)));
     for (AlignmentReference::Level& level : reference.levels) {

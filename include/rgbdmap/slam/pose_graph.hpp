@@ -16,7 +16,7 @@ namespace rgbdmap {
 class PoseGraph {
  public:
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
-  // 192 bytes instead of 432: a patrol adds one or two a keyframe for as long as it runs. The
+  // 208 bytes instead of 432: a patrol adds one or two a keyframe for as long as it runs. The
   // measurement's top three rows; the square root of the information as an upper triangle in
   // floats (a weight: a float's precision is plenty, and the bits read back are the bits
   // written).
