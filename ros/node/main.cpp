@@ -55,7 +55,7 @@ bool writeMapNow(RunControl& control, const RunStats& stats, const std::string& 
 }
 
 std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c,
-                           std::uint64_t maps) {
+                           std::uint64_t maps, const SessionStream::Totals& session) {
   const auto brace = json.find_last_of('}');
   std::string out = json.substr(0, brace);
   while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
@@ -65,7 +65,10 @@ std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c
          ", \"paired\": " + std::to_string(c.paired) +
          ", \"buffer_dropped\": " + std::to_string(c.buffer_dropped) +
          ", \"unmatched\": " + std::to_string(c.unmatched) +
-         ", \"maps_published\": " + std::to_string(maps) + "}\n}\n";
+         ", \"maps_published\": " + std::to_string(maps) +
+         ", \"session_bytes\": " + std::to_string(session.bytes) +
+         ", \"session_keyframes\": " + std::to_string(session.keyframes) +
+         ", \"session_places\": " + std::to_string(session.places) + "}\n}\n";
   return out;
 }
 
@@ -129,6 +132,9 @@ int runNode(RunControl& control, RunSignals& signals) {
   publish.grid_interval = settings.grid_interval;
   publish.up = config.up;
   publish.grid = config.grid;
+  // Only a mapping run has a session to stream (localising adds nothing to the saved one).
+  publish.session.interval = localise_in ? 0.0 : settings.session_interval;
+  publish.session.stream.bytes_per_second = settings.session_rate;
   RosPublisher publisher(pnh, publish);
 
   outputs.status_line = false;
@@ -161,6 +167,15 @@ int runNode(RunControl& control, RunSignals& signals) {
             if (response.success) response.message = settings.octomap;
             return true;
           });
+  ros::ServiceServer resend;
+  if (publisher.session())
+    resend = service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
+        "session/resend", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+          publisher.session()->resend();
+          response.success = true;
+          response.message = "run " + std::to_string(publisher.session()->run());
+          return true;
+        });
   ros::AsyncSpinner service_spinner(1, &service_queue);
   service_spinner.start();
   if (localise_in)
@@ -193,7 +208,9 @@ int runNode(RunControl& control, RunSignals& signals) {
       stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
   if (!settings.stats.empty()) {
     std::ofstream out(settings.stats);
-    out << withNodeCounts(stats.toJson(), counts, publisher.mapsPublished());
+    out << withNodeCounts(
+        stats.toJson(), counts, publisher.mapsPublished(),
+        publisher.session() ? publisher.session()->totals() : SessionStream::Totals{});
     if (!out) spdlog::error("{}: cannot write statistics", settings.stats);
   }
   service_spinner.stop();

@@ -60,6 +60,10 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
   if (!(s.map_interval >= 0))
     throw InputError("parameter " + nh.resolveName("map_interval") + ": must be >= 0");
   s.grid_interval = numberParam(nh, "grid_interval", "5");
+  s.session_interval = numberParam(nh, "session_interval", "1");
+  s.session_rate = numberParam(nh, "session_rate", "500000");
+  if (!(s.session_rate > 0))
+    throw InputError("parameter " + nh.resolveName("session_rate") + ": must be > 0 (bytes/s)");
   s.grid = stringParam(nh, "grid", "");
   s.octomap = stringParam(nh, "octomap", stem(s.out) + ".bt");
   s.localise = stringParam(nh, "localise", "");
@@ -88,7 +92,8 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   const std::string prefix = nh.getNamespace() + "/";
   const std::set<std::string> settings = {
       "config",        "out",  "stats",   "map_frame", "camera_frame", "map_interval",
-      "grid_interval", "grid", "octomap", "localise",  "continue"};
+      "grid_interval", "grid", "octomap", "localise",  "continue",     "session_interval",
+      "session_rate"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
@@ -99,10 +104,11 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
       for (char& c : key)
         if (c == '/') c = '.';
       if (!keys.count(key))
-        throw InputError(
-            "parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
-            "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
-            "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, ~localise, ~continue)");
+        throw InputError("parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
+                         "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
+                         "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, "
+                         "~localise, ~continue, ~session_interval, " +
+                         "~session_rate)");
     }
   }
   for (const Key& key : config.keys()) {

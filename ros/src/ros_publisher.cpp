@@ -43,7 +43,13 @@ RosPublisher::RosPublisher(ros::NodeHandle& private_nh, Options options)
   pose_pub_ = private_nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   if (options_.grid_interval >= 0.0)
     grid_pub_ = private_nh.advertise<nav_msgs::OccupancyGrid>("grid", 1, true);
+  if (options_.session.interval > 0.0)
+    session_ = std::make_unique<SessionPublisher>(private_nh, options_.session);
   thread_ = std::thread([this] { run(); });
+}
+
+void RosPublisher::attachGraph(const LoopCloser* graph, const CameraIntrinsics& camera) {
+  if (session_) session_->attach(graph, camera);
 }
 
 RosPublisher::~RosPublisher() { finish(); }

@@ -7,6 +7,7 @@
 #include <rosbag/bag.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_msgs/UInt8MultiArray.h>
 #include <std_srvs/Trigger.h>
 
 #include <atomic>
@@ -14,7 +15,10 @@
 #include <filesystem>
 #include <mutex>
 
+#include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/runtime/session_stream.hpp"
 #include "ros_test_support.hpp"
 
 namespace rgbdmap::test {
@@ -234,6 +238,92 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
   EXPECT_LE(static_cast<double>(got.poses.load()), tracked) << stats;
   EXPECT_GT(got.poses.load(), 0u);
   expectEveryFrameAccountedFor(dir_ + "/stats.json", 100);
+}
+
+// What a fleet's merger receives: the node's session as it grows, on ~session/graph and
+// ~session/places, within ~session_rate; built back, it is the session the node saves.
+TEST_F(RosNode, StreamsItsSessionWithinItsByteBudget) {
+  const double rate = 300e3;  // bytes/s
+  std::mutex mutex;
+  SessionAssembler merger;
+  std::uint64_t bytes = 0, largest = 0, graph_records = 0;
+  bool gap = false;
+  std::string refused;
+  const auto receive = [&](const std::string& topic) {
+    return [&, topic](const std_msgs::UInt8MultiArray::ConstPtr& m) {
+      const std::string record(m->data.begin(), m->data.end());
+      std::lock_guard<std::mutex> lock(mutex);
+      bytes += record.size();
+      largest = std::max<std::uint64_t>(largest, record.size());
+      graph_records += topic == "graph";
+      try {
+        // The first records may go out before this subscriber is connected: ask again.
+        gap = merger.apply(record, topic) == SessionAssembler::Result::kGap || gap;
+      } catch (const InputError& e) {
+        refused = e.what();
+      }
+    };
+  };
+  ros::Subscriber graph =
+      nh_->subscribe<std_msgs::UInt8MultiArray>("/rgbdmap/session/graph", 1000, receive("graph"));
+  ros::Subscriber places =
+      nh_->subscribe<std_msgs::UInt8MultiArray>("/rgbdmap/session/places", 1000, receive("places"));
+  const auto started = std::chrono::steady_clock::now();
+  const std::string node_log = dir_ + "/node.log";
+  std::vector<std::string> args = nodeArgs(dir_, "");
+  args.push_back("_session_rate:=" + std::to_string(rate));
+  Process node(args, node_log);
+  auto player = play(sharedBag(kRpy), "", dir_ + "/play.log");
+  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+  ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
+  std_srvs::Trigger save;
+  ASSERT_TRUE(ros::service::call("/rgbdmap/save_map", save)) << readFile(node_log);
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  const Session saved = readSession(dir_ + "/map.session");
+  const std::size_t keyframes = saved.graph.keyframes.size();
+  std::size_t settled = 0;  // places the stream sends (the newest keyframe's may still go)
+  for (std::size_t id = 0; id + 1 < keyframes; ++id) settled += saved.graph.places[id] ? 1 : 0;
+  ASSERT_GE(keyframes, 2u);
+  // Everything saved arrives (asking again once if the first records were missed).
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (gap) {
+          gap = false;
+          std_srvs::Trigger resend;
+          if (ros::service::call("/rgbdmap/session/resend", resend)) {
+            EXPECT_EQ(resend.response.message, "run " + std::to_string(merger.run()));
+          }
+        }
+        return merger.keyframes() >= keyframes && merger.places() >= settled;
+      },
+      120))
+      << merger.keyframes() << " of " << keyframes << " keyframes, " << merger.places() << " of "
+      << settled << " places\n"
+      << readFile(node_log);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(refused, "");
+  const Session got = merger.session();
+  for (std::size_t i = 0; i < keyframes; ++i) {
+    EXPECT_EQ(got.graph.keyframes[i].timestamp, saved.graph.keyframes[i].timestamp);
+    EXPECT_TRUE(got.graph.keyframes[i].odometry.isApprox(saved.graph.keyframes[i].odometry, 1e-12));
+  }
+  EXPECT_GE(got.graph.edges.size(), saved.graph.edges.size());
+  for (std::size_t id = 0; id + 1 < keyframes; ++id)
+    EXPECT_EQ(static_cast<bool>(got.graph.places[id]), static_cast<bool>(saved.graph.places[id]))
+        << "keyframe " << id;
+  // Within the budget: what it earned since the node started, the 2 s it may save and the one
+  // place that may overdraw it.
+  EXPECT_LE(static_cast<double>(bytes), rate * (seconds + 2.0) + static_cast<double>(largest))
+      << bytes << " bytes in " << seconds << " s";
+  EXPECT_GT(bytes, 0u);
+  node.signal(SIGINT);
+  ASSERT_EQ(node.wait(60), 0) << readFile(node_log);
+  const std::string stats = readFile(dir_ + "/stats.json");
+  EXPECT_GE(jsonNumber(stats, "session_keyframes"), static_cast<double>(keyframes)) << stats;
+  EXPECT_NE(readFile(node_log).find("session stream: "), std::string::npos);
 }
 
 TEST_F(RosNode, TwoRobotsAndAConsumerOnOneMaster) {

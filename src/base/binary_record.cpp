@@ -68,6 +68,13 @@ RecordWriter::RecordWriter(int fd, const char (&kind)[5], std::uint32_t version)
   buffer_.reserve(kBufferBytes);
 }
 
+RecordWriter::RecordWriter(std::string& sink, const char (&kind)[5], std::uint32_t version)
+    : sink_(&sink), version_(version), hash_(kFnvOffset) {
+  std::memcpy(kind_, kind, 4);
+  sink.clear();
+  buffer_.assign(sizeof(Header), '\0');  // filled in by finish()
+}
+
 void RecordWriter::putBytes(const void* data, std::size_t size) {
   if (size == 0) return;
   const char* bytes = static_cast<const char*>(data);
@@ -83,6 +90,11 @@ void RecordWriter::putBytes(const void* data, std::size_t size) {
 }
 
 void RecordWriter::flush() {
+  if (sink_) {
+    sink_->append(buffer_);
+    buffer_.clear();
+    return;
+  }
   if (ok_ && !writeAll(fd_, buffer_.data(), buffer_.size())) {
     ok_ = false;
     error_ = errno;
@@ -98,6 +110,10 @@ bool RecordWriter::finish() {
   header.version = version_;
   header.size = size_;
   header.hash = hash_;
+  if (sink_) {
+    std::memcpy(sink_->data(), &header, sizeof header);
+    return true;
+  }
   if (ok_ && ::pwrite(fd_, &header, sizeof header, 0) != static_cast<ssize_t>(sizeof header)) {
     ok_ = false;
     error_ = errno;
@@ -111,7 +127,17 @@ BinaryReader openRecord(const std::string& path, const char (&kind)[5], std::uin
   if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
   std::ostringstream content;
   content << in.rdbuf();
-  std::string data = std::move(content).str();
+  return readRecord(std::move(content).str(), path, kind, version);
+}
+
+std::string recordKind(const std::string& data) {
+  if (data.size() < sizeof(Header) || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0)
+    return "";
+  return data.substr(sizeof kMagic, 4);
+}
+
+BinaryReader readRecord(std::string data, const std::string& path, const char (&kind)[5],
+                        std::uint32_t version) {
   Header header{};
   if (data.size() < sizeof header || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0)
     throw InputError(path + ": not an rgbdmap file (no RGBDMAP header)");

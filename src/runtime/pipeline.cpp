@@ -256,6 +256,7 @@ int Pipeline::run(RunControl& control) {
     localiser = std::make_unique<Localiser>(saved_->graph, config.camera, config.tracking,
                                             config.loop, config.filter.min_depth,
                                             config.filter.max_depth, *corrections, stats_, !live);
+  GraphAttachment graph_attachment(outputs_.publisher, loop_closer.get(), config.camera);
   std::unique_ptr<FramesBeforePlacement> before_placement;
   if (localising || continuing)
     before_placement = std::make_unique<FramesBeforePlacement>(*corrections);
@@ -358,6 +359,7 @@ int Pipeline::run(RunControl& control) {
       saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, config,
                    sessionFile(outputs_, mapper, loop_closer.get(), config, configuration), stats_);
   // No keyframe comes any more and the session is saved: the places can go.
+  graph_attachment.release();
   if (loop_closer) loop_closer->forgetPlaces();
   const std::string fatal = error.get();
   if (!fatal.empty()) {

@@ -15,6 +15,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
+#include "rgbdmap/runtime/session_records.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -30,24 +31,6 @@ constexpr const char* kKeyframesFile = "keyframes.bin";
 constexpr char kGraphKind[5] = "GRPH";
 constexpr char kPlacesKind[5] = "PLCS";
 constexpr char kKeyframesKind[5] = "KFRM";
-// A place's descriptors are ORB's: 32 bytes a row.
-constexpr int kDescriptorBytes = 32;
-
-void putPose(RecordWriter& out, const Eigen::Isometry3d& pose) {
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) out.put<double>(pose.matrix()(r, c));
-}
-
-Eigen::Isometry3d getPose(BinaryReader& in) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = in.get<double>();
-  // Bit for bit as written (a session read and written again is the same files); a rotation that
-  // is not one is damage the checksum missed.
-  if (!pose.matrix().allFinite() || !(pose.linear() * pose.linear().transpose()).isIdentity(1e-6))
-    in.fail("corrupt (a pose that is not a rigid motion)");
-  return pose;
-}
 
 // The graph's keyframes and edges, counted into `summary`, from a saved graph or a live one.
 template <typename Graph>
@@ -63,12 +46,7 @@ void putGraph(const Graph& graph, RecordWriter& out, SessionSummary& summary) {
   summary.edges = graph.edges().size();
   out.put<std::uint64_t>(summary.edges);
   for (const PoseGraph::Edge& e : graph.edges()) {
-    out.put<std::int32_t>(e.from);
-    out.put<std::int32_t>(e.to);
-    out.put<std::uint8_t>(e.loop ? 1 : 0);
-    putPose(out, e.measurement());
-    const PoseGraph::Matrix6d sqrt_information = e.sqrtInformation();
-    for (int i = 0; i < 36; ++i) out.put<double>(sqrt_information.data()[i]);
+    putEdge(out, e);
     summary.loop_edges += e.loop ? 1 : 0;
   }
 }
@@ -82,10 +60,7 @@ struct SavedGraphView {
 };
 
 void writeGraph(const Session& s, RecordWriter& out, SessionSummary& summary) {
-  const CameraIntrinsics& c = s.camera;
-  out.put<std::int32_t>(c.width);
-  out.put<std::int32_t>(c.height);
-  for (const double v : {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3}) out.put(v);
+  putCamera(out, s.camera);
   if (s.live_graph)
     s.live_graph->readGraph(
         [&](const LoopCloser::GraphView& graph) { putGraph(graph, out, summary); });
@@ -94,13 +69,7 @@ void writeGraph(const Session& s, RecordWriter& out, SessionSummary& summary) {
 }
 
 void readGraph(BinaryReader in, Session& s) {
-  CameraIntrinsics& c = s.camera;
-  c.width = in.get<std::int32_t>();
-  c.height = in.get<std::int32_t>();
-  for (double* v : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2, &c.p1, &c.p2, &c.k3})
-    *v = in.get<double>();
-  if (c.width <= 0 || c.height <= 0 || !(c.fx > 0) || !(c.fy > 0))
-    in.fail("corrupt (camera " + std::to_string(c.width) + "x" + std::to_string(c.height) + ")");
+  s.camera = getCamera(in);
   const std::size_t keyframes = in.count(8 + 2 * 12 * 8);
   s.graph.keyframes.resize(keyframes);
   for (LoopCloser::Saved::Keyframe& k : s.graph.keyframes) {
@@ -110,20 +79,7 @@ void readGraph(BinaryReader in, Session& s) {
   }
   const std::size_t edges = in.count(9 + 48 * 8);
   s.graph.edges.resize(edges);
-  for (PoseGraph::Edge& e : s.graph.edges) {
-    e.from = in.get<std::int32_t>();
-    e.to = in.get<std::int32_t>();
-    e.loop = in.get<std::uint8_t>() != 0;
-    e.setMeasurement(getPose(in));
-    PoseGraph::Matrix6d sqrt_information;
-    for (int i = 0; i < 36; ++i) sqrt_information.data()[i] = in.get<double>();
-    if (!sqrt_information.allFinite()) in.fail("corrupt (an edge's weight is not a number)");
-    e.setSqrtInformation(sqrt_information);
-    if (e.from < 0 || e.to < 0 || static_cast<std::size_t>(e.from) >= keyframes ||
-        static_cast<std::size_t>(e.to) >= keyframes)
-      in.fail("corrupt (an edge " + std::to_string(e.from) + " -> " + std::to_string(e.to) +
-              " between keyframes that are not there)");
-  }
+  for (PoseGraph::Edge& e : s.graph.edges) e = getEdge(in, keyframes);
   if (!in.atEnd()) in.fail("corrupt (bytes after the edges)");
 }
 
@@ -141,13 +97,7 @@ void writePlaces(const Session& s, RecordWriter& out, SessionSummary& summary) {
     out.put<std::uint8_t>(place ? 1 : 0);
     if (!place) continue;
     ++summary.places;
-    const RelocalisationView& view = place->view;
-    out.put<std::uint64_t>(view.points.size());
-    for (const cv::Point3f& p : view.points) out.put(p);
-    const cv::Mat descriptors =
-        view.descriptors.isContinuous() ? view.descriptors : view.descriptors.clone();
-    out.put<std::uint64_t>(static_cast<std::uint64_t>(descriptors.rows));
-    if (descriptors.rows > 0) out.putBytes(descriptors.data, descriptors.total());
+    putView(out, place->view);
     // Expanded as the aligner takes it (the file keeps the format it had before places were
     // packed in memory; packing again gives the same points).
     place->reference.expand(reference);
@@ -173,16 +123,7 @@ void readPlaces(BinaryReader in, Session& s) {
   for (auto& slot : s.graph.places) {
     if (in.get<std::uint8_t>() == 0) continue;
     auto place = std::make_shared<PlaceRecognition::Place>();
-    RelocalisationView& view = place->view;
-    view.points.resize(in.count(sizeof(cv::Point3f)));
-    for (cv::Point3f& p : view.points) p = in.get<cv::Point3f>();
-    const std::size_t rows = in.count(kDescriptorBytes);
-    if (rows != view.points.size())
-      in.fail("corrupt (" + std::to_string(rows) + " descriptors for " +
-              std::to_string(view.points.size()) + " points)");
-    view.descriptors.create(static_cast<int>(rows), kDescriptorBytes, CV_8UC1);
-    if (rows > 0) in.getBytes(view.descriptors.data, rows * kDescriptorBytes);
-    view.described = true;
+    place->view = getView(in);
     reference.valid_pixels = in.get<std::int32_t>();
     reference.levels.resize(in.count(sizeof(LevelCamera)));
     for (AlignmentReference::Level& level : reference.levels) {

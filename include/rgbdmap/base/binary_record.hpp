@@ -18,6 +18,9 @@ class RecordWriter {
  public:
   // `fd`: an empty file open for writing (and seeking).
   RecordWriter(int fd, const char (&kind)[5], std::uint32_t version);
+  // Into memory: `sink` (emptied first) holds the whole record after finish(); a record sent as
+  // a message is the same bytes as a file of it.
+  RecordWriter(std::string& sink, const char (&kind)[5], std::uint32_t version);
 
   template <typename T>
   void put(const T& value) {
@@ -35,7 +38,8 @@ class RecordWriter {
  private:
   void flush();
 
-  int fd_;
+  int fd_ = -1;
+  std::string* sink_ = nullptr;
   char kind_[4];
   std::uint32_t version_;
   std::string buffer_;
@@ -76,5 +80,10 @@ class BinaryReader {
 // Reads `path` and checks its header against `kind` and `version`; throws InputError naming the
 // file and what is wrong (missing, another kind, another version, truncated, corrupt).
 BinaryReader openRecord(const std::string& path, const char (&kind)[5], std::uint32_t version);
+// The same checks on a record held in memory (a message); `name` names it in the messages.
+BinaryReader readRecord(std::string data, const std::string& name, const char (&kind)[5],
+                        std::uint32_t version);
+// A record's kind (its four letters), or "" when `data` does not start with a record header.
+std::string recordKind(const std::string& data);
 
 }  // namespace rgbdmap

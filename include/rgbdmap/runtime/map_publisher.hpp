@@ -12,6 +12,7 @@
 
 namespace rgbdmap {
 
+class LoopCloser;
 class Mapper;
 
 // The run's counters as they were after a frame (plain values: a subscriber may keep them).
@@ -38,6 +39,31 @@ class MapPublisher {
   // What the map says about up, given just before each map (for a subscriber that draws an
   // occupancy grid from it); most subscribers ignore it.
   virtual void publishUp(const UpEvidence& /*evidence*/) {}
+  // The run's loop closer, once made (for a subscriber that streams the session as it grows:
+  // it reads it on its own thread through LoopCloser::readGraph()), and null before it goes; a
+  // subscriber must stop reading it before returning from the null call.
+  virtual void attachGraph(const LoopCloser* /*graph*/, const CameraIntrinsics& /*camera*/) {}
+};
+
+// Attaches the loop closer to a publisher for as long as it lives (declared after it, so that
+// the publisher lets go first, on every way out of the run).
+class GraphAttachment {
+ public:
+  GraphAttachment(MapPublisher* publisher, const LoopCloser* graph, const CameraIntrinsics& camera)
+      : publisher_(graph ? publisher : nullptr), camera_(camera) {
+    if (publisher_) publisher_->attachGraph(graph, camera_);
+  }
+  ~GraphAttachment() { release(); }
+  GraphAttachment(const GraphAttachment&) = delete;
+  GraphAttachment& operator=(const GraphAttachment&) = delete;
+  void release() {
+    if (publisher_) publisher_->attachGraph(nullptr, camera_);
+    publisher_ = nullptr;
+  }
+
+ private:
+  MapPublisher* publisher_;
+  CameraIntrinsics camera_;
 };
 
 // Feeds a publisher (or nothing, when it is null). Frames are published from the tracking

@@ -17,8 +17,12 @@ struct NodeSettings {
   std::string camera_frame;  // ~camera_frame ("" = the colour images' frame_id)
   double map_interval = 2;   // ~map_interval: seconds between published maps at least
   double grid_interval = 5;  // ~grid_interval: seconds between published grids (< 0: no ~grid)
-  std::string grid;          // ~grid: the grid's PGM (and YAML) written with every save ("" = none)
-  std::string octomap;       // ~octomap: the OctoMap written with every save and ~save_octomap
+  // ~session_interval: seconds between looks at the graph for ~session/graph and
+  // ~session/places (<= 0: not streamed); ~session_rate: bytes a second they stay under.
+  double session_interval = 1;
+  double session_rate = 500e3;
+  std::string grid;     // ~grid: the grid's PGM (and YAML) written with every save ("" = none)
+  std::string octomap;  // ~octomap: the OctoMap written with every save and ~save_octomap
   // ~localise: a saved session (MAP.session) to localise in instead of mapping: poses and TF in
   // its map's frame, nothing mapped ("" = map).
   std::string localise;

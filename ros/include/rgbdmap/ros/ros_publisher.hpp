@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "rgbdmap/mapping/occupancy_grid.hpp"
+#include "rgbdmap/ros/session_publisher.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
 
 namespace rgbdmap {
@@ -31,6 +32,8 @@ class RosPublisher : public MapPublisher {
     double grid_interval = 5.0;  // seconds between grids at most; negative: no grid
     UpOptions up;
     GridOptions grid;
+    // ~session/graph and ~session/places (SessionPublisher); interval <= 0: not streamed.
+    SessionPublisher::Options session;
   };
   RosPublisher(ros::NodeHandle& private_nh, Options options);
   ~RosPublisher() override;
@@ -39,6 +42,9 @@ class RosPublisher : public MapPublisher {
   bool wantsMap() const override;
   void publishMap(std::shared_ptr<const MapCloud> map) override;
   void publishUp(const UpEvidence& evidence) override;
+  void attachGraph(const LoopCloser* graph, const CameraIntrinsics& camera) override;
+  // The session stream (null when not streamed).
+  SessionPublisher* session() { return session_.get(); }
 
   // Publishes what is still waiting (the final map) and stops the thread.
   void finish();
@@ -80,6 +86,7 @@ class RosPublisher : public MapPublisher {
   bool stop_ = false;
   std::atomic<std::uint64_t> maps_published_{0};
   std::thread thread_;
+  std::unique_ptr<SessionPublisher> session_;
 };
 
 }  // namespace rgbdmap

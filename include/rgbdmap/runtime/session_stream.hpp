@@ -1,0 +1,89 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rgbdmap/base/binary_record.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/slam/loop_closer.hpp"
+
+namespace rgbdmap {
+
+// A session sent live, as it grows: what a robot gives a fleet's merger (docs/ros.md). Records
+// of the session's own encoding (binary_record: kind, version, checksum), one a message:
+//  - a graph record: the run's id, the camera, the keyframes added since the last graph record
+//    (timestamp, odometry, pose as optimised when sent) and the edges added since;
+//  - a place record: one keyframe's place (ORB features with 3-D points, and the dense reference
+//    packed as loop closure keeps it: 8 bytes a point).
+// No images: the map itself goes another way. Graph records always go (a few hundred bytes a
+// keyframe); places, tens to hundreds of KB each, wait for the byte budget, oldest first.
+class SessionStream {
+ public:
+  struct Options {
+    double bytes_per_second = 500e3;  // the average the records stay under
+    double burst_seconds = 2.0;       // budget saved while idle, at most
+  };
+  struct Record {
+    enum class Kind { kGraph, kPlace } kind;
+    std::string bytes;
+  };
+  struct Totals {
+    std::uint64_t keyframes = 0, edges = 0, places = 0, bytes = 0, restarts = 0;
+  };
+
+  // `run`: this run's id (a robot that restarts is a new run: its old part is not duplicated).
+  SessionStream(std::uint64_t run, const CameraIntrinsics& camera, Options options);
+
+  // The records due at `now` (steady-clock seconds): what the graph gained since the last call,
+  // then places while the budget allows. Reads the graph under its lock once (loop closure
+  // waits at most that long).
+  std::vector<Record> take(const LoopCloser& graph, double now);
+  // Everything again from the first keyframe (a merger that started late, or lost records).
+  void restart();
+  const Totals& totals() const { return totals_; }
+  std::uint64_t run() const { return run_; }
+
+ private:
+  std::uint64_t run_;
+  CameraIntrinsics camera_;
+  Options options_;
+  std::size_t keyframes_sent_ = 0, edges_sent_ = 0, next_place_ = 0;
+  double budget_ = 0.0;  // bytes; may go below zero by one place
+  double budget_at_ = -1.0;
+  Totals totals_;
+};
+
+// Builds a session back from its stream (a merger's view of one robot).
+class SessionAssembler {
+ public:
+  enum class Result {
+    kApplied,
+    kNewRun,  // the record came from another run: what was assembled was dropped first
+    kGap,     // records are missing before it: not applied (ask for the stream again)
+  };
+  // Throws InputError naming `source` (a topic) when `record` is not a session record or is
+  // damaged; what was assembled stays.
+  Result apply(const std::string& record, const std::string& source);
+
+  std::uint64_t run() const { return run_; }
+  std::size_t keyframes() const { return session_.graph.keyframes.size(); }
+  std::size_t edges() const { return session_.graph.edges.size(); }
+  std::size_t places() const { return places_.size(); }
+  // The session so far: camera, keyframes, edges and places (no kept keyframes: no images).
+  Session session() const;
+
+ private:
+  void reset(std::uint64_t run);
+  Result applyGraph(BinaryReader& in);
+  Result applyPlace(BinaryReader& in);
+
+  std::uint64_t run_ = 0;
+  bool started_ = false;
+  Session session_;
+  std::map<std::size_t, std::shared_ptr<const PlaceRecognition::Place>> places_;
+};
+
+}  // namespace rgbdmap

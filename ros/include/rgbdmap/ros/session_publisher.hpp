@@ -1,0 +1,55 @@
+#pragma once
+
+#include <ros/ros.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "rgbdmap/runtime/session_stream.hpp"
+
+namespace rgbdmap {
+
+// The session as it grows, for a fleet's merger: ~session/graph and ~session/places
+// (std_msgs/UInt8MultiArray, each message one SessionStream record), every `interval` seconds
+// from a thread of its own, within the stream's byte budget. Mapping never waits for it (it reads
+// the graph under the loop closer's lock, as a checkpoint does).
+class SessionPublisher {
+ public:
+  struct Options {
+    double interval = 1.0;  // seconds between looks at the graph
+    SessionStream::Options stream;
+  };
+  SessionPublisher(ros::NodeHandle& private_nh, Options options);
+  ~SessionPublisher();
+
+  // The loop closer to stream (null: stop reading it; returns once the thread has let go).
+  void attach(const LoopCloser* graph, const CameraIntrinsics& camera);
+  // Everything again from the first keyframe (~session/resend: a merger that came late).
+  void resend() { resend_.store(true); }
+  // What went out so far (after the last attach(nullptr): final).
+  SessionStream::Totals totals() const;
+  std::uint64_t run() const { return run_; }
+
+ private:
+  void loop();
+  void send(double now);
+
+  Options options_;
+  std::uint64_t run_;
+  ros::Publisher graph_pub_, places_pub_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  const LoopCloser* graph_ = nullptr;
+  std::unique_ptr<SessionStream> stream_;
+  SessionStream::Totals totals_;
+  double started_ = 0.0;
+  std::atomic<bool> resend_{false};
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace rgbdmap

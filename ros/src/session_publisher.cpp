@@ -1,0 +1,89 @@
+#include "rgbdmap/ros/session_publisher.hpp"
+
+#include <spdlog/spdlog.h>
+#include <std_msgs/UInt8MultiArray.h>
+
+#include <chrono>
+#include <random>
+
+#include "rgbdmap/base/steady_time.hpp"
+
+namespace rgbdmap {
+namespace {
+
+// A run's id: another on every start, so that a merger tells a restarted robot's stream from
+// the one before.
+std::uint64_t newRunId() {
+  std::random_device device;
+  const auto clock =
+      static_cast<std::uint64_t>(std::chrono::system_clock::now().time_since_epoch().count());
+  return ((static_cast<std::uint64_t>(device()) << 32) | device()) ^ clock;
+}
+
+}  // namespace
+
+SessionPublisher::SessionPublisher(ros::NodeHandle& private_nh, Options options)
+    : options_(options), run_(newRunId()) {
+  // Not latched and deep: every record counts (a lost one makes the merger ask again).
+  graph_pub_ = private_nh.advertise<std_msgs::UInt8MultiArray>("session/graph", 100);
+  places_pub_ = private_nh.advertise<std_msgs::UInt8MultiArray>("session/places", 100);
+  thread_ = std::thread([this] { loop(); });
+}
+
+SessionPublisher::~SessionPublisher() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+    graph_ = nullptr;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void SessionPublisher::attach(const LoopCloser* graph, const CameraIntrinsics& camera) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (graph && !stream_) {
+    stream_ = std::make_unique<SessionStream>(run_, camera, options_.stream);
+    started_ = steadySeconds();
+  }
+  if (!graph && graph_ && stream_) {
+    // What the budget still allows goes out before the graph is let go.
+    send(steadySeconds());
+    totals_ = stream_->totals();
+    const double seconds = std::max(1e-3, steadySeconds() - started_);
+    spdlog::info(
+        "session stream: {} keyframes, {} edges and {} places sent, {:.1f} MB in {:.0f} s "
+        "({:.0f} KB/s)",
+        totals_.keyframes, totals_.edges, totals_.places, totals_.bytes / 1e6, seconds,
+        totals_.bytes / 1e3 / seconds);
+  }
+  graph_ = graph;
+  wake_.notify_all();
+}
+
+SessionStream::Totals SessionPublisher::totals() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stream_ ? stream_->totals() : totals_;
+}
+
+void SessionPublisher::send(double now) {
+  if (resend_.exchange(false)) {
+    stream_->restart();
+    spdlog::info("session stream: sending the session again from its first keyframe");
+  }
+  for (SessionStream::Record& record : stream_->take(*graph_, now)) {
+    std_msgs::UInt8MultiArray msg;
+    msg.data.assign(record.bytes.begin(), record.bytes.end());
+    (record.kind == SessionStream::Record::Kind::kGraph ? graph_pub_ : places_pub_).publish(msg);
+  }
+}
+
+void SessionPublisher::loop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stop_) {
+    if (graph_) send(steadySeconds());
+    wake_.wait_for(lock, std::chrono::duration<double>(options_.interval));
+  }
+}
+
+}  // namespace rgbdmap

@@ -1,0 +1,205 @@
+#include "rgbdmap/runtime/session_stream.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rgbdmap/base/binary_record.hpp"
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/session_records.hpp"
+
+namespace rgbdmap {
+namespace {
+
+constexpr char kGraphKind[5] = "SGRF";
+constexpr char kPlaceKind[5] = "SPLC";
+constexpr std::uint32_t kVersion = 1;
+constexpr std::size_t kPoseBytes = 12 * 8;
+constexpr std::size_t kEdgeBytes = 9 + kPoseBytes + 36 * 8;
+
+void putPlace(RecordWriter& out, const PlaceRecognition::Place& place) {
+  putView(out, place.view);
+  const PackedReference& reference = place.reference;
+  out.put<std::int32_t>(reference.valid_pixels);
+  out.put<std::uint64_t>(reference.levels.size());
+  for (const PackedReference::Level& level : reference.levels) {
+    out.put(level.camera);
+    out.put<std::uint64_t>(level.points.size());
+    out.putBytes(level.points.data(), level.points.size() * sizeof(PackedReference::Point));
+  }
+}
+
+std::shared_ptr<const PlaceRecognition::Place> getPlace(BinaryReader& in) {
+  auto place = std::make_shared<PlaceRecognition::Place>();
+  place->view = getView(in);
+  PackedReference& reference = place->reference;
+  reference.valid_pixels = in.get<std::int32_t>();
+  reference.levels.resize(in.count(sizeof(LevelCamera)));
+  for (PackedReference::Level& level : reference.levels) {
+    level.camera = in.get<LevelCamera>();
+    const LevelCamera& c = level.camera;
+    if (c.width < 0 || c.height < 0 || !std::isfinite(c.fx) || !std::isfinite(c.fy) ||
+        !std::isfinite(c.cx) || !std::isfinite(c.cy))
+      in.fail("corrupt (a place's reference level with camera " + std::to_string(c.width) + "x" +
+              std::to_string(c.height) + ")");
+    level.points.resize(in.count(sizeof(PackedReference::Point)));
+    in.getBytes(level.points.data(), level.points.size() * sizeof(PackedReference::Point));
+  }
+  return place;
+}
+
+}  // namespace
+
+SessionStream::SessionStream(std::uint64_t run, const CameraIntrinsics& camera, Options options)
+    : run_(run), camera_(camera), options_(options) {}
+
+void SessionStream::restart() {
+  keyframes_sent_ = edges_sent_ = next_place_ = 0;
+  ++totals_.restarts;
+}
+
+std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, double now) {
+  std::vector<Record> records;
+  const double burst = options_.bytes_per_second * options_.burst_seconds;
+  // The first call may spend a burst at once (the stream starts with its budget saved).
+  budget_ = budget_at_ < 0.0
+                ? burst
+                : std::min(burst, budget_ + (now - budget_at_) * options_.bytes_per_second);
+  budget_at_ = now;
+
+  std::size_t keyframes = 0;
+  std::string bytes;
+  graph.readGraph([&](const LoopCloser::GraphView& view) {
+    keyframes = view.keyframes();
+    const std::size_t edges = view.edges().size();
+    if (keyframes == keyframes_sent_ && edges == edges_sent_) return;
+    RecordWriter out(bytes, kGraphKind, kVersion);
+    out.put<std::uint64_t>(run_);
+    putCamera(out, camera_);
+    out.put<std::uint64_t>(keyframes_sent_);
+    out.put<std::uint64_t>(keyframes - keyframes_sent_);
+    for (std::size_t id = keyframes_sent_; id < keyframes; ++id) {
+      const LoopCloser::Saved::Keyframe k = view.keyframe(id);
+      out.put(k.timestamp);
+      putPose(out, k.odometry);
+      putPose(out, k.pose);
+    }
+    out.put<std::uint64_t>(edges_sent_);
+    out.put<std::uint64_t>(edges - edges_sent_);
+    for (std::size_t i = edges_sent_; i < edges; ++i) putEdge(out, view.edges()[i]);
+    out.finish();
+    totals_.keyframes += keyframes - keyframes_sent_;
+    totals_.edges += edges - edges_sent_;
+    keyframes_sent_ = keyframes;
+    edges_sent_ = edges;
+  });
+  if (!bytes.empty()) {
+    budget_ -= static_cast<double>(bytes.size());
+    totals_.bytes += bytes.size();
+    records.push_back({Record::Kind::kGraph, std::move(bytes)});
+  }
+
+  // The newest keyframe's place may still be let go (when an older one is near); the ones
+  // before it are settled.
+  const std::size_t settled = keyframes > 0 ? keyframes - 1 : 0;
+  if (next_place_ >= settled || budget_ <= 0.0) return records;
+  const auto places = graph.places();
+  const std::size_t end = std::min(settled, places.size());
+  for (; next_place_ < end && budget_ > 0.0; ++next_place_) {
+    const auto& place = places[next_place_];
+    if (!place) continue;
+    std::string record;
+    RecordWriter out(record, kPlaceKind, kVersion);
+    out.put<std::uint64_t>(run_);
+    out.put<std::uint64_t>(next_place_);
+    putPlace(out, *place);
+    out.finish();
+    budget_ -= static_cast<double>(record.size());
+    totals_.bytes += record.size();
+    ++totals_.places;
+    records.push_back({Record::Kind::kPlace, std::move(record)});
+  }
+  return records;
+}
+
+void SessionAssembler::reset(std::uint64_t run) {
+  run_ = run;
+  started_ = true;
+  session_ = Session{};
+  places_.clear();
+}
+
+SessionAssembler::Result SessionAssembler::apply(const std::string& record,
+                                                 const std::string& source) {
+  const std::string kind = recordKind(record);
+  const bool graph = kind == kGraphKind;
+  if (!graph && kind != kPlaceKind)
+    throw InputError(source + ": not a session record (" +
+                     (kind.empty() ? std::string("no RGBDMAP header") : "kind '" + kind + "'") +
+                     ")");
+  BinaryReader in = readRecord(record, source, graph ? kGraphKind : kPlaceKind, kVersion);
+  return graph ? applyGraph(in) : applyPlace(in);
+}
+
+SessionAssembler::Result SessionAssembler::applyGraph(BinaryReader& in) {
+  const std::uint64_t run = in.get<std::uint64_t>();
+  const CameraIntrinsics camera = getCamera(in);
+  const std::size_t first = in.get<std::uint64_t>();
+  const std::size_t count = in.count(8 + 2 * kPoseBytes);
+  std::vector<LoopCloser::Saved::Keyframe> keyframes(count);
+  for (LoopCloser::Saved::Keyframe& k : keyframes) {
+    k.timestamp = in.get<double>();
+    k.odometry = getPose(in);
+    k.pose = getPose(in);
+  }
+  const std::size_t first_edge = in.get<std::uint64_t>();
+  const std::size_t edge_count = in.count(kEdgeBytes);
+  std::vector<PoseGraph::Edge> edges;
+  edges.reserve(edge_count);
+  for (std::size_t i = 0; i < edge_count; ++i) edges.push_back(getEdge(in, first + count));
+  if (!in.atEnd()) in.fail("corrupt (bytes after the edges)");
+
+  Result result = Result::kApplied;
+  if (!started_ || run != run_) {
+    reset(run);
+    result = Result::kNewRun;
+  }
+  auto& graph = session_.graph;
+  if (first > graph.keyframes.size() || first_edge > graph.edges.size()) return Result::kGap;
+  session_.camera = camera;
+  // Sent again (the stream restarted): what is known already keeps its place, with the newer
+  // pose estimate.
+  for (std::size_t i = 0; i < count; ++i) {
+    if (first + i < graph.keyframes.size())
+      graph.keyframes[first + i].pose = keyframes[i].pose;
+    else
+      graph.keyframes.push_back(keyframes[i]);
+  }
+  for (std::size_t i = graph.edges.size() - first_edge; i < edges.size(); ++i)
+    graph.edges.push_back(edges[i]);
+  return result;
+}
+
+SessionAssembler::Result SessionAssembler::applyPlace(BinaryReader& in) {
+  const std::uint64_t run = in.get<std::uint64_t>();
+  const std::size_t id = in.get<std::uint64_t>();
+  auto place = getPlace(in);
+  if (!in.atEnd()) in.fail("corrupt (bytes after the place)");
+  Result result = Result::kApplied;
+  if (!started_ || run != run_) {
+    reset(run);
+    result = Result::kNewRun;
+  }
+  places_[id] = std::move(place);
+  return result;
+}
+
+Session SessionAssembler::session() const {
+  Session s = session_;
+  s.created_by = "rgbdmap session stream";
+  s.graph.places.assign(s.graph.keyframes.size(), nullptr);
+  for (const auto& [id, place] : places_)
+    if (id < s.graph.places.size()) s.graph.places[id] = place;
+  return s;
+}
+
+}  // namespace rgbdmap
