@@ -8,7 +8,10 @@
 #include <vector>
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/runtime/session_merge.hpp"
+#include "rgbdmap/runtime/session_stream.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 
@@ -38,6 +41,19 @@ class RoomSessions : public ::testing::Test {
   }
   std::string dir_, first_, second_;
 };
+
+// What a fleet's merger receives of a run: its session as a robot streams it (graph and places,
+// no kept keyframes), built back from the records.
+Session streamed(const Session& saved) {
+  PoseCorrections corrections;
+  RunStats stats;
+  LoopCloser robot(saved.camera, TrackingOptions{}, LoopOptions{}, 0.3, 4.0, corrections, stats,
+                   true, &saved.graph);
+  SessionStream stream(1, saved.camera, SessionStream::Options{1e12, 1.0});
+  SessionAssembler merger;
+  for (const SessionStream::Record& r : stream.take(robot, 0.0)) merger.apply(r.bytes, "test");
+  return merger.session();
+}
 
 TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
   const std::string map_before = test::digest(dir_ + "/a.pcd");
@@ -183,6 +199,34 @@ TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
   // The merged session reads back.
   EXPECT_EQ(test::run(test::binary() + " session " + dir_ + "/merged.session", &output), 0)
       << output;
+}
+
+TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
+  // A fleet's merger has no images: each robot's places (ORB features, packed dense reference)
+  // must place it (PlaceMatcher: PnP, ICP of the references, agreement of two or more).
+  test::mapTo(second_, dir_ + "/b.pcd");
+  test::mapTo(test::tumDir("rgbd_dataset_freiburg1_xyz"), dir_ + "/c.pcd");  // a real desk
+  const Session a = streamed(readSession(dir_ + "/a.session"));
+  const Session b = streamed(readSession(dir_ + "/b.session"));
+  const Session c = streamed(readSession(dir_ + "/c.session"));
+  ASSERT_TRUE(a.keyframes.empty() && b.keyframes.empty());
+  std::vector<SessionMerger::Placement> placements;
+  Config settings;
+  SessionMerger(settings).merge({a, c, b}, placements);
+  EXPECT_FALSE(placements[1].placed);  // elsewhere: shares no place
+  ASSERT_TRUE(placements[2].placed);
+  EXPECT_EQ(placements[2].linked_to, 0);
+  placements.erase(placements.begin() + 1);
+  const Eigen::Isometry3d truth =
+      frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
+      frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
+  const Eigen::Isometry3d error = truth.inverse() * placements[1].transform;
+  const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
+  std::cout << "robot B placed by " << placements[1].links
+            << " places: " << error.translation().norm() * 100 << " cm and " << degrees
+            << " degrees from the truth\n";
+  EXPECT_LT(error.translation().norm(), 0.02);
+  EXPECT_LT(degrees, 1.0);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "rgbdmap/mapping/keyframe_store.hpp"
 #include "rgbdmap/slam/motion.hpp"
+#include "rgbdmap/slam/place_matcher.hpp"
 #include "rgbdmap/slam/place_recognition.hpp"
 #include "rgbdmap/slam/pose_graph.hpp"
 
@@ -41,6 +42,7 @@ SessionMerger::SessionMerger(const Config& settings, Options options)
 
 std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merged,
                                                              const Session& session) const {
+  if (session.keyframes.empty()) return findPlaceMatches(merged, session);
   PlaceRecognition recognition(session.camera, settings_.tracking, settings_.loop,
                                settings_.filter.min_depth, settings_.filter.max_depth);
   std::vector<int> candidates;
@@ -84,6 +86,52 @@ std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merg
     m.information = found->information;
     m.inliers = found->inliers;
     matches.push_back(m);
+  }
+  return matches;
+}
+
+std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(const Session& merged,
+                                                                  const Session& session) const {
+  const PlaceMatcher matcher(session.camera, settings_.loop);
+  std::vector<int> targets, queries;
+  for (std::size_t id = 0; id < merged.graph.places.size(); ++id)
+    if (merged.graph.places[id]) targets.push_back(static_cast<int>(id));
+  const std::size_t keyframes = session.graph.keyframes.size();
+  for (std::size_t id = 0; id < std::min(keyframes, session.graph.places.size()); ++id)
+    if (session.graph.places[id]) queries.push_back(static_cast<int>(id));
+  std::vector<Match> matches;
+  const std::size_t stride =
+      std::max<std::size_t>(1, queries.size() / std::max<std::size_t>(1, options_.max_queries));
+  for (std::size_t i = 0; i < queries.size(); i += stride) {
+    const int node = queries[i];
+    const PlaceRecognition::Place& query = *session.graph.places[static_cast<std::size_t>(node)];
+    // The most alike places first, as loop closure ranks its candidates.
+    std::vector<std::pair<int, int>> ranked;  // (matches, id)
+    for (const int target : targets) {
+      const int alike =
+          matcher.similarity(*merged.graph.places[static_cast<std::size_t>(target)], query);
+      if (alike >= settings_.loop.min_matches) ranked.emplace_back(alike, target);
+    }
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (static_cast<int>(ranked.size()) > settings_.loop.max_candidates)
+      ranked.resize(static_cast<std::size_t>(settings_.loop.max_candidates));
+    for (const auto& [alike, target] : ranked) {
+      const std::optional<LoopMeasurement> found =
+          matcher.match(*merged.graph.places[static_cast<std::size_t>(target)], query);
+      if (!found) continue;
+      Match m;
+      m.node = node;
+      m.target = target;
+      m.transform = frameInSavedMap(merged.graph.keyframes[static_cast<std::size_t>(target)].pose,
+                                    found->later_in_earlier,
+                                    session.graph.keyframes[static_cast<std::size_t>(node)].pose);
+      m.measurement = found->later_in_earlier;
+      m.information = found->information;
+      m.inliers = found->inliers;
+      matches.push_back(m);
+      break;
+    }
   }
   return matches;
 }

@@ -15,6 +15,7 @@ namespace rgbdmap {
 // (loop closure's verification: ORB, PnP, dense alignment) and agree on where its frame lies;
 // then one pose graph is optimised over all of them: the placed sessions' keyframes held, the
 // new one's free, its odometry and loop edges kept, and a loop edge for each agreeing place.
+// A session without kept keyframes (a robot's stream) is looked for by its places instead.
 // Sessions are tried again until none more can be placed, so a session linked only through
 // another one joins too. A session that shares no place with the others is left out.
 class SessionMerger {
@@ -48,6 +49,9 @@ class SessionMerger {
   // The session's kept keyframes found among the merged places, each with the session's frame
   // it implies.
   std::vector<Match> findMatches(const Session& merged, const Session& session) const;
+  // The same for a session without kept keyframes (streamed by a robot: no images), by its
+  // places: each one looked for among the merged places (PlaceMatcher).
+  std::vector<Match> findPlaceMatches(const Session& merged, const Session& session) const;
   std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
   void append(Session& merged, std::vector<int>& owner, int index, const Session& session,
               const std::vector<Match>& links) const;
