@@ -8,7 +8,9 @@
 #include <sstream>
 #include <vector>
 
+#include "rgbdmap/eval/trajectory_evaluation.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
+#include "rgbdmap/runtime/session_stream.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap::test {
@@ -97,6 +99,21 @@ std::size_t mergedPoints(const std::string& first, const std::string& second,
   EXPECT_EQ(run(binary() + " merge " + first + " " + second + " --out " + out, &output), 0)
       << output;
   return fs::exists(out) ? loadMap(out).size() : 0;
+}
+
+std::vector<std::string> streamOf(const Session& saved, std::uint64_t run) {
+  PoseCorrections corrections;
+  RunStats stats;
+  LoopCloser robot(saved.camera, TrackingOptions{}, LoopOptions{}, 0.3, 4.0, corrections, stats,
+                   true, &saved.graph);
+  SessionStream stream(run, saved.camera, SessionStream::Options{1e12, 1.0});
+  std::vector<std::string> records;
+  for (SessionStream::Record& r : stream.take(robot, 0.0)) records.push_back(std::move(r.bytes));
+  return records;
+}
+
+Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& truth) {
+  return absoluteTrajectoryError(Trajectory::load(keyframes), Trajectory::load(truth)).alignment;
 }
 
 double precisionOf(const std::string& map, const std::string& scene,

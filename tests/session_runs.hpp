@@ -6,8 +6,10 @@
 #include <Eigen/Geometry>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
 
 namespace rgbdmap::test {
 
@@ -43,6 +45,14 @@ std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms
 // fused into one TSDF): what a continued map is compared with.
 std::size_t mergedPoints(const std::string& first, const std::string& second,
                          const std::string& out);
+
+// The records a robot streams of `saved` (its graph and places: SessionStream, no budget) as run
+// `run`: what a fleet's merger receives of it.
+std::vector<std::string> streamOf(const Session& saved, std::uint64_t run);
+
+// Where a run's frame lies in its scene: its keyframes (a TUM trajectory file) aligned to the
+// ground truth's.
+Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& truth);
 
 // `rgbdmap evaluate map`'s precision at 1 cm of an odometry map, moved by `trajectory`'s
 // alignment to the scene's ground truth.

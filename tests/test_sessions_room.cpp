@@ -35,23 +35,14 @@ class RoomSessions : public ::testing::Test {
         test::sequenceTail(test::sharedSynthetic("walk_lap_seed2", kSecondWalk), 180, dir_ + "/b");
     test::mapTo(first_, dir_ + "/a.pcd");
   }
-  // Where a run's frame lies in the room: its keyframes aligned to the truth.
-  static Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& truth) {
-    return absoluteTrajectoryError(Trajectory::load(keyframes), Trajectory::load(truth)).alignment;
-  }
   std::string dir_, first_, second_;
 };
 
 // What a fleet's merger receives of a run: its session as a robot streams it (graph and places,
 // no kept keyframes), built back from the records.
 Session streamed(const Session& saved) {
-  PoseCorrections corrections;
-  RunStats stats;
-  LoopCloser robot(saved.camera, TrackingOptions{}, LoopOptions{}, 0.3, 4.0, corrections, stats,
-                   true, &saved.graph);
-  SessionStream stream(1, saved.camera, SessionStream::Options{1e12, 1.0});
   SessionAssembler merger;
-  for (const SessionStream::Record& r : stream.take(robot, 0.0)) merger.apply(r.bytes, "test");
+  for (const std::string& r : test::streamOf(saved, 1)) merger.apply(r, "test");
   return merger.session();
 }
 
@@ -69,7 +60,7 @@ TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
   // Against the truth, in the frame the first run's keyframes align to theirs: one alignment,
   // made without the localised frames.
   const Eigen::Isometry3d saved_to_world =
-      frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt");
+      test::frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt");
   const Trajectory truth = Trajectory::load(second_ + "/groundtruth.txt");
   std::vector<double> errors;
   for (const StampedPose& p : run.trajectory.poses()) {
@@ -180,8 +171,8 @@ TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
 
   // B's frame in A's against the truth: both runs' frames located in the room.
   const Eigen::Isometry3d truth =
-      frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
-      frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
+      test::frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
+      test::frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
   const Eigen::Isometry3d error = truth.inverse() * *b;
   const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
   std::cout << "B's frame in A's: " << error.translation().norm() * 100 << " cm and " << degrees
@@ -218,8 +209,8 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   EXPECT_EQ(placements[2].linked_to, 0);
   placements.erase(placements.begin() + 1);
   const Eigen::Isometry3d truth =
-      frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
-      frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
+      test::frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
+      test::frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
   const Eigen::Isometry3d error = truth.inverse() * placements[1].transform;
   const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
   std::cout << "robot B placed by " << placements[1].links

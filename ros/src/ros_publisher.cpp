@@ -10,6 +10,8 @@
 #include <chrono>
 #include <cstring>
 
+#include "rgbdmap/ros/cloud_message.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -23,15 +25,6 @@ ros::Time rosTime(double seconds) {
   ros::Time t;
   if (seconds > 0) t.fromSec(seconds);
   return t;
-}
-
-sensor_msgs::PointField field(const char* name, std::uint32_t offset) {
-  sensor_msgs::PointField f;
-  f.name = name;
-  f.offset = offset;
-  f.datatype = sensor_msgs::PointField::FLOAT32;
-  f.count = 1;
-  return f;
 }
 
 }  // namespace
@@ -192,28 +185,7 @@ void RosPublisher::sendGrid(const MapCloud& map, const UpEvidence& up, double st
 }
 
 void RosPublisher::sendMap(const MapCloud& map, double stamp) {
-  // x, y, z and PCL's packed rgb float: what rviz and pcl_conversions read.
-  constexpr std::uint32_t kStep = 16;
-  sensor_msgs::PointCloud2 msg;
-  msg.header.stamp = rosTime(stamp);
-  msg.header.frame_id = options_.map_frame;
-  msg.height = 1;
-  msg.width = static_cast<std::uint32_t>(map.size());
-  msg.fields = {field("x", 0), field("y", 4), field("z", 8), field("rgb", 12)};
-  msg.is_bigendian = false;
-  msg.point_step = kStep;
-  msg.row_step = kStep * msg.width;
-  msg.is_dense = true;
-  msg.data.resize(static_cast<std::size_t>(msg.row_step));
-  std::uint8_t* out = msg.data.data();
-  for (const pcl::PointXYZRGB& p : map.points) {
-    std::memcpy(out, &p.x, 4);
-    std::memcpy(out + 4, &p.y, 4);
-    std::memcpy(out + 8, &p.z, 4);
-    std::memcpy(out + 12, &p.rgb, 4);
-    out += kStep;
-  }
-  map_pub_.publish(msg);
+  map_pub_.publish(toCloudMessage(map, options_.map_frame, stamp));
   maps_published_.fetch_add(1);
 }
 

@@ -33,20 +33,55 @@ int freePort() {
 }  // namespace
 
 std::string nodeBinary() { return RGBDMAP_NODE_BINARY; }
+std::string mergerBinary() { return RGBDMAP_MERGER_BINARY; }
 std::string tum2bagBinary() { return RGBDMAP_TUM2BAG_BINARY; }
+
+std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns) {
+  std::vector<std::string> args = {nodeBinary(), "_out:=" + dir + "/map.pcd",
+                                   "_stats:=" + dir + "/stats.json", "_map_interval:=1"};
+  if (!ns.empty()) {
+    args.push_back("__ns:=" + ns);
+    args.push_back("_map_frame:=" + ns + "/map");
+  }
+  return args;
+}
+
+std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
+                              const std::string& log) {
+  const std::string p = ns.empty() ? "" : "/" + ns;
+  std::vector<std::string> args = {"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers"};
+  if (!ns.empty()) args.push_back("--prefix=" + p);
+  args.push_back(bag);  // before --topics, which takes every argument after it
+  for (const char* t :
+       {"--topics", "/camera/rgb/image_color", "/camera/depth/image", "/camera/rgb/camera_info"})
+    args.push_back(t);
+  return std::make_unique<Process>(args, log);
+}
+
+bool waitUntilSilent(const std::string& node_log) {
+  return waitUntil(
+      [&] {
+        return readFile(node_log).find("camera stopped delivering frames") != std::string::npos;
+      },
+      30);
+}
 
 std::string sharedBag(const std::string& tum_name, const std::string& options,
                       const std::string& suffix) {
   namespace fs = std::filesystem;
   const std::string folder = std::string(RGBDMAP_TEST_TMP) + "/bags";
   fs::create_directories(folder);
-  const std::string path = folder + "/" + tum_name + suffix + ".bag";
+  // A folder's path (a synthetic sequence) or the name of a shared TUM folder.
+  const bool is_path = tum_name.find('/') != std::string::npos;
+  const std::string name = is_path ? fs::path(tum_name).filename().string() : tum_name;
+  const std::string path = folder + "/" + name + suffix + ".bag";
   if (fs::exists(path)) return path;
   // Written beside and renamed: tests running at the same time never see half a bag.
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   std::string output;
-  const int code =
-      run(tum2bagBinary() + " " + options + " " + tumDir(tum_name) + " " + tmp, &output);
+  const int code = run(
+      tum2bagBinary() + " " + options + " " + (is_path ? tum_name : tumDir(tum_name)) + " " + tmp,
+      &output);
   EXPECT_EQ(code, 0) << output;
   // A failed conversion leaves no bag behind for the next test to take as good.
   if (code == 0)

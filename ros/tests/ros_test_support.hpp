@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -9,6 +10,7 @@ namespace rgbdmap::test {
 
 // A bag written once per build from a shared TUM folder by rgbdmap-tum2bag, in TUM's topic
 // layout, named like TUM's bags (so that the folder's preset applies): tests/tmp/bags/<name>.bag.
+// `tum_name` may also be a folder's path (a synthetic sequence): the bag is named after it.
 // `options` are tum2bag's ("--depth16"); bags with different options get different files.
 std::string sharedBag(const std::string& tum_name, const std::string& options = "",
                       const std::string& suffix = "");
@@ -26,7 +28,19 @@ class Roscore {
   std::unique_ptr<Process> process_;
 };
 
+// rgbdmap_node's command line writing into `dir` (map.pcd, stats.json; maps every second), in
+// namespace `ns` with its own map frame (ns/map) when given.
+std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns);
+// rosbag play at the recorded rate, once the node subscribed (no image lost to a late
+// connection); `ns` prefixes the topics, as for a second robot.
+std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
+                              const std::string& log);
+// The node took every image played: after the bag ends its last images are paired, and the
+// camera is reported silent (the pipeline checkpoints and waits for it).
+bool waitUntilSilent(const std::string& node_log);
+
 std::string nodeBinary();
+std::string mergerBinary();
 std::string tum2bagBinary();
 
 }  // namespace rgbdmap::test

@@ -85,40 +85,6 @@ struct Received {
   }
 };
 
-std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns) {
-  std::vector<std::string> args = {nodeBinary(), "_out:=" + dir + "/map.pcd",
-                                   "_stats:=" + dir + "/stats.json", "_map_interval:=1"};
-  if (!ns.empty()) {
-    args.push_back("__ns:=" + ns);
-    args.push_back("_map_frame:=" + ns + "/map");
-  }
-  return args;
-}
-
-// rosbag play at the recorded rate, once the node subscribed (no image lost to a late
-// connection); `ns` prefixes the topics, as for a second robot.
-std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
-                              const std::string& log) {
-  const std::string p = ns.empty() ? "" : "/" + ns;
-  std::vector<std::string> args = {"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers"};
-  if (!ns.empty()) args.push_back("--prefix=" + p);
-  args.push_back(bag);  // before --topics, which takes every argument after it
-  for (const char* t :
-       {"--topics", "/camera/rgb/image_color", "/camera/depth/image", "/camera/rgb/camera_info"})
-    args.push_back(t);
-  return std::make_unique<Process>(args, log);
-}
-
-// The node took every image played: after the bag ends its last images are paired, and the
-// camera is reported silent (the pipeline checkpoints and waits for it).
-bool waitUntilSilent(const std::string& node_log) {
-  return waitUntil(
-      [&] {
-        return readFile(node_log).find("camera stopped delivering frames") != std::string::npos;
-      },
-      30);
-}
-
 // Checks the node's end-of-run counters: every pair of images it made was mapped or counted as
 // dropped (in its buffer or its queue) or skipped, none came from nowhere, and some were mapped.
 // Not how many were dropped: that depends on the machine's load (bench/ros_node_drops.sh).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
@@ -119,6 +120,16 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
     records.push_back({Record::Kind::kPlace, std::move(record)});
   }
   return records;
+}
+
+std::optional<std::uint64_t> runOfRecord(const std::string& record) {
+  const std::string kind = recordKind(record);
+  constexpr std::size_t kHeaderBytes = 32;
+  if ((kind != kGraphKind && kind != kPlaceKind) || record.size() < kHeaderBytes + 8)
+    return std::nullopt;
+  std::uint64_t run = 0;
+  std::memcpy(&run, record.data() + kHeaderBytes, sizeof run);
+  return run;
 }
 
 void SessionAssembler::reset(std::uint64_t run) {

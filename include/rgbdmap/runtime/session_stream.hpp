@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,10 @@ class SessionStream {
   double budget_at_ = -1.0;
   Totals totals_;
 };
+
+// The run a session record comes from (none: not a session record). Not checked beyond that:
+// SessionAssembler::apply() checks the whole record.
+std::optional<std::uint64_t> runOfRecord(const std::string& record);
 
 // Builds a session back from its stream (a merger's view of one robot).
 class SessionAssembler {

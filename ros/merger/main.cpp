@@ -1,0 +1,221 @@
+// rgbdmap_merger: one map of a fleet. Subscribes to the session stream and the map of every
+// robot in ~robots (the namespaces their rgbdmap_node runs in), places the robots in the first
+// one's frame by the places they share, and publishes the merged map (/merged/map, latched, at
+// most every ~map_interval s) and TF ~merged_frame -> <robot>/map for every placed robot;
+// ~save_map writes the merged map and session. Robots never wait for it.
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <spdlog/spdlog.h>
+#include <std_msgs/UInt8MultiArray.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <atomic>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/ros/cloud_message.hpp"
+#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/runtime/exit_code.hpp"
+#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+
+namespace {
+
+using namespace rgbdmap;
+
+struct Settings {
+  std::vector<std::string> robots;  // namespaces, without a trailing '/'
+  std::string out = "merged.pcd";   // with MERGED.session beside it
+  std::string merged_frame = "merged_map";
+  std::string config = "default";
+  double map_interval = 2.0;
+  double merge_interval = 1.0;
+  double voxel = 0.005;
+};
+
+// ~robots: a list of strings, or one string of names separated by spaces or commas.
+std::vector<std::string> robotsParam(const ros::NodeHandle& pnh) {
+  std::vector<std::string> robots;
+  std::string text;
+  if (!pnh.getParam("robots", robots) && pnh.getParam("robots", text)) {
+    for (char& c : text)
+      if (c == ',') c = ' ';
+    std::istringstream words(text);
+    for (std::string w; words >> w;) robots.push_back(w);
+  }
+  std::set<std::string> seen;
+  for (std::string& r : robots) {
+    while (!r.empty() && r.back() == '/') r.pop_back();
+    if (r.empty() || r.front() != '/') r = "/" + r;
+    if (!seen.insert(r).second)
+      throw InputError("parameter " + pnh.resolveName("robots") + ": " + r + " is listed twice");
+  }
+  if (robots.size() < 2)
+    throw InputError("parameter " + pnh.resolveName("robots") +
+                     ": the namespaces of two robots or more, the first one's frame is the "
+                     "merged map's (e.g. _robots:=\"robot1 robot2\")");
+  return robots;
+}
+
+Settings readSettings(const ros::NodeHandle& pnh) {
+  Settings s;
+  s.robots = robotsParam(pnh);
+  pnh.param("out", s.out, s.out);
+  pnh.param("merged_frame", s.merged_frame, s.merged_frame);
+  pnh.param("config", s.config, s.config);
+  pnh.param("map_interval", s.map_interval, s.map_interval);
+  pnh.param("merge_interval", s.merge_interval, s.merge_interval);
+  pnh.param("voxel", s.voxel, s.voxel);
+  if (!(s.merge_interval > 0) || !(s.map_interval >= 0) || !(s.voxel > 0))
+    throw InputError("parameters " + pnh.resolveName("merge_interval") + ", " +
+                     pnh.resolveName("map_interval") + " and " + pnh.resolveName("voxel") +
+                     ": must be > 0, >= 0 and > 0");
+  return s;
+}
+
+std::string frameOf(const std::string& robot) { return robot.substr(1) + "/map"; }
+
+// The merged map and session, written beside each other; the answer says where or why not.
+bool save(const FleetMerger& merger, const Settings& s, std::string& message) {
+  const MapCloud map = merger.map(s.voxel);
+  const Session session = merger.session();
+  const std::string session_path =
+      (std::filesystem::path(s.out).replace_extension(".session")).string();
+  std::string error;
+  if (session.graph.keyframes.empty()) {
+    message = "nothing to save: no robot's stream has arrived";
+    return false;
+  }
+  if (!writePcdAtomically(map, s.out, error) || !writeSession(session, session_path, error)) {
+    message = error;
+    return false;
+  }
+  message = s.out + " (" + std::to_string(map.size()) + " points) and " + session_path;
+  return true;
+}
+
+void report(const std::vector<FleetMerger::Robot>& robots) {
+  for (const FleetMerger::Robot& r : robots)
+    if (!r.placed)
+      spdlog::info(
+          "merger: {} not placed: {} keyframes and {} places received, none shared with "
+          "a placed robot",
+          r.name, r.keyframes, r.places);
+}
+
+int runMerger() {
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  const Settings s = readSettings(pnh);
+  Config config;
+  config.loadPreset(s.config);
+  FleetMerger merger(s.robots, config);
+
+  std::atomic<bool> resend_wanted[64];
+  if (s.robots.size() > 64) throw InputError(pnh.resolveName("robots") + ": at most 64 robots");
+  for (auto& w : resend_wanted) w.store(true);  // a merger that starts late asks for everything
+  std::vector<ros::Subscriber> subscribers;
+  for (std::size_t i = 0; i < s.robots.size(); ++i) {
+    for (const char* topic : {"/rgbdmap/session/graph", "/rgbdmap/session/places"}) {
+      const std::string name = s.robots[i] + topic;
+      subscribers.push_back(nh.subscribe<std_msgs::UInt8MultiArray>(
+          name, 1000, [&, i, name](const std_msgs::UInt8MultiArray::ConstPtr& m) {
+            try {
+              const std::string record(m->data.begin(), m->data.end());
+              if (merger.receive(i, record, name) == SessionAssembler::Result::kGap)
+                resend_wanted[i].store(true);
+            } catch (const InputError& e) {
+              spdlog::warn("merger: {} (record ignored)", e.what());
+            }
+          }));
+    }
+    const std::string map_topic = s.robots[i] + "/rgbdmap/map";
+    subscribers.push_back(nh.subscribe<sensor_msgs::PointCloud2>(
+        map_topic, 1, [&, i, map_topic](const sensor_msgs::PointCloud2::ConstPtr& m) {
+          auto map = std::make_shared<MapCloud>();
+          std::string error;
+          if (!fromCloudMessage(*m, *map, error)) {
+            spdlog::warn("merger: {}: {} (map ignored)", map_topic, error);
+            return;
+          }
+          merger.receiveMap(i, std::move(map), m->header.stamp.toSec());
+        }));
+  }
+  ros::Publisher map_pub = nh.advertise<sensor_msgs::PointCloud2>("/merged/map", 1, true);
+  tf2_ros::TransformBroadcaster tf;
+  ros::ServiceServer save_map =
+      pnh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
+          "save_map", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+            merger.merge();
+            response.success = save(merger, s, response.message);
+            report(merger.robots());
+            return true;
+          });
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  spdlog::info(
+      "merger: robots {}; publishing /merged/map and TF {} -> <robot>/map; service {}",
+      [&] {
+        std::string all;
+        for (const auto& r : s.robots) all += (all.empty() ? "" : " ") + r;
+        return all;
+      }(),
+      s.merged_frame, save_map.getService());
+
+  ros::WallTime next_map(0.0);
+  while (ros::ok()) {
+    for (std::size_t i = 0; i < s.robots.size(); ++i) {
+      if (!resend_wanted[i].exchange(false)) continue;
+      const std::string service = s.robots[i] + "/rgbdmap/session/resend";
+      std_srvs::Trigger call;
+      // Not there yet (the robot starts later): asked again next time.
+      if (!ros::service::exists(service, false) || !ros::service::call(service, call))
+        resend_wanted[i].store(true);
+    }
+    const bool changed = merger.merge();
+    const ros::Time now = ros::Time::now();
+    for (const FleetMerger::Robot& r : merger.robots()) {
+      if (!r.placed) continue;
+      geometry_msgs::TransformStamped t;
+      t.header.stamp = now;
+      t.header.frame_id = s.merged_frame;
+      t.child_frame_id = frameOf(r.name);
+      const Eigen::Quaterniond q(r.transform.linear());
+      t.transform.translation.x = r.transform.translation().x();
+      t.transform.translation.y = r.transform.translation().y();
+      t.transform.translation.z = r.transform.translation().z();
+      t.transform.rotation.x = q.x();
+      t.transform.rotation.y = q.y();
+      t.transform.rotation.z = q.z();
+      t.transform.rotation.w = q.w();
+      tf.sendTransform(t);
+    }
+    if (changed && ros::WallTime::now() >= next_map) {
+      map_pub.publish(toCloudMessage(merger.map(s.voxel), s.merged_frame, now.toSec()));
+      next_map = ros::WallTime::now() + ros::WallDuration(s.map_interval);
+    }
+    ros::WallDuration(s.merge_interval).sleep();
+  }
+  // Stopped (Ctrl-C): the merged map and session as they are.
+  merger.merge();
+  std::string message;
+  if (save(merger, s, message))
+    spdlog::info("merger: saved {}", message);
+  else
+    spdlog::warn("merger: {}", message);
+  report(merger.robots());
+  spinner.stop();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  spdlog::default_logger_raw();
+  ros::init(argc, argv, "rgbdmap_merger");
+  return rgbdmap::runGuarded([&] { return runMerger(); });
+}

@@ -1,0 +1,150 @@
+// rgbdmap_merger on a roscore of the test's own: robots' nodes fed bags at the recorded rate,
+// the merger placing them in one frame by their streamed sessions.
+
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <csignal>
+#include <filesystem>
+
+#include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/runtime/session_file.hpp"
+#include "ros_test_support.hpp"
+#include "session_runs.hpp"
+
+namespace rgbdmap::test {
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kRealTime = false;  // the nodes drop most frames: too few places to be placed
+#else
+constexpr bool kRealTime = true;
+#endif
+
+class RosMerger : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = freshDir();
+    core_ = std::make_unique<Roscore>(dir_);
+    int argc = 0;
+    ros::init(argc, nullptr, "rgbdmap_test_merger", ros::init_options::NoSigintHandler);
+    nh_ = std::make_unique<ros::NodeHandle>();
+    spinner_ = std::make_unique<ros::AsyncSpinner>(2);
+    spinner_->start();
+  }
+  void TearDown() override {
+    spinner_->stop();
+    nh_.reset();
+    ros::shutdown();
+    core_.reset();
+  }
+  std::string dir_;
+  std::unique_ptr<Roscore> core_;
+  std::unique_ptr<ros::NodeHandle> nh_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
+
+TEST_F(RosMerger, TwoRobotsInOneRoomBecomeOneMapAndARobotElsewhereIsReported) {
+  // Robot 1 walks a lap of the synthetic room; robot 2 the second half of another lap, 15 cm
+  // further from the walls (it starts on the far side); robot 3 is at a real desk elsewhere.
+  const std::string first = sharedSynthetic("walk_lap_seed1", " --path walk --frames 360 --seed 1");
+  const std::string second_lap =
+      sharedSynthetic("walk_lap_seed2", " --path walk --frames 360 --seed 2 --path-inset 0.95");
+  const std::string second = sequenceTail(second_lap, 180, dir_ + "/walk_lap_seed2_tail");
+  const std::vector<std::string> robots = {"robot1", "robot2", "robot3"};
+  for (const auto& r : robots) std::filesystem::create_directories(dir_ + "/" + r);
+  Process merger({mergerBinary(), "_robots:=robot1 robot2 robot3", "_out:=" + dir_ + "/merged.pcd"},
+                 dir_ + "/merger.log");
+  std::vector<std::unique_ptr<Process>> nodes, players;
+  for (const auto& r : robots)
+    nodes.push_back(
+        std::make_unique<Process>(nodeArgs(dir_ + "/" + r, r), dir_ + "/" + r + "/node.log"));
+  players.push_back(play(sharedBag(first), "robot1", dir_ + "/robot1/play.log"));
+  players.push_back(play(sharedBag(second), "robot2", dir_ + "/robot2/play.log"));
+  players.push_back(
+      play(sharedBag("rgbd_dataset_freiburg1_xyz"), "robot3", dir_ + "/robot3/play.log"));
+  for (std::size_t i = 0; i < players.size(); ++i)
+    ASSERT_EQ(players[i]->wait(120), 0) << readFile(dir_ + "/" + robots[i] + "/play.log");
+  for (const auto& r : robots)
+    ASSERT_TRUE(waitUntilSilent(dir_ + "/" + r + "/node.log"))
+        << readFile(dir_ + "/" + r + "/node.log");
+
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  if (kRealTime) {
+    ASSERT_TRUE(waitUntil(
+        [&] {
+          return readFile(dir_ + "/merger.log").find("/robot2 placed, linked with /robot1") !=
+                 std::string::npos;
+        },
+        120))
+        << readFile(dir_ + "/merger.log");
+    ASSERT_TRUE(waitUntil(
+        [&] { return buffer.canTransform("merged_map", "robot2/map", ros::Time(0)); }, 30));
+  }
+  std_srvs::Trigger save;
+  ASSERT_TRUE(ros::service::call("/rgbdmap_merger/save_map", save))
+      << readFile(dir_ + "/merger.log");
+  EXPECT_TRUE(save.response.success) << save.response.message;
+  geometry_msgs::TransformStamped published;
+  if (kRealTime) published = buffer.lookupTransform("merged_map", "robot2/map", ros::Time(0));
+
+  for (auto& node : nodes) node->signal(SIGINT);
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    ASSERT_EQ(nodes[i]->wait(60), 0) << readFile(dir_ + "/" + robots[i] + "/node.log");
+  merger.signal(SIGINT);
+  ASSERT_EQ(merger.wait(60), 0) << readFile(dir_ + "/merger.log");
+  const std::string log = readFile(dir_ + "/merger.log");
+  // Robot 3 shares no place: kept apart, and said.
+  EXPECT_NE(log.find("/robot3 not placed"), std::string::npos) << log;
+  EXPECT_EQ(log.find("/robot3 placed"), std::string::npos) << log;
+  EXPECT_TRUE(std::filesystem::exists(dir_ + "/merged.session/graph.bin")) << log;
+  if (!kRealTime) return;
+
+  // Robot 2's frame in robot 1's against the truth.
+  const Eigen::Isometry3d truth =
+      frameInWorld(dir_ + "/robot1/map_keyframes.txt", first + "/groundtruth.txt").inverse() *
+      frameInWorld(dir_ + "/robot2/map_keyframes.txt", second + "/groundtruth.txt");
+  Eigen::Isometry3d tf = Eigen::Isometry3d::Identity();
+  tf.translation() =
+      Eigen::Vector3d(published.transform.translation.x, published.transform.translation.y,
+                      published.transform.translation.z);
+  tf.linear() = Eigen::Quaterniond(published.transform.rotation.w, published.transform.rotation.x,
+                                   published.transform.rotation.y, published.transform.rotation.z)
+                    .toRotationMatrix();
+  const Eigen::Isometry3d error = truth.inverse() * tf;
+  const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
+  std::cout << "merger: robot 2's frame " << error.translation().norm() * 100 << " cm and "
+            << degrees << " degrees from the truth\n";
+  EXPECT_LT(error.translation().norm(), 0.02);
+  EXPECT_LT(degrees, 1.0);
+  // One map of both: each robot's own map moved by its placement (a robot's own drift stays in
+  // it, so the merged map is as precise as the robots' maps are, no less: no layer added).
+  const double alone1 =
+      precisionOf(dir_ + "/robot1/map.pcd", first, dir_ + "/robot1/map_keyframes.txt");
+  const double alone2 =
+      precisionOf(dir_ + "/robot2/map.pcd", second_lap, dir_ + "/robot2/map_keyframes.txt");
+  const double merged =
+      precisionOf(dir_ + "/merged.pcd", first, dir_ + "/robot1/map_keyframes.txt");
+  std::cout << "precision at 1 cm: merged " << merged << ", robot 1 alone " << alone1
+            << ", robot 2 alone " << alone2 << "\n";
+  EXPECT_GE(merged, std::min(alone1, alone2) - 0.01);
+  EXPECT_GT(loadMap(dir_ + "/merged.pcd").size(), loadMap(dir_ + "/robot1/map.pcd").size());
+}
+
+TEST(RosMergerLaunch, TheFleetLaunchFileStartsEveryRobotAndTheMerger) {
+  std::string output;
+  ASSERT_EQ(run("roslaunch --nodes " + std::string(RGBDMAP_SOURCE_DIR) + "/ros/launch/fleet.launch",
+                &output),
+            0)
+      << output;
+  for (const char* node : {"/robot1/rgbdmap", "/robot2/rgbdmap", "/rgbdmap_merger"})
+    EXPECT_NE(output.find(node), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rgbdmap::test

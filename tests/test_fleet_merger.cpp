@@ -1,0 +1,125 @@
+// FleetMerger (rgbdmap_merger's core) on streamed sessions: a robot that drives a route already
+// mapped is placed where it is, one elsewhere is not, a restarted robot's old run stays, and the
+// merged map averages what overlaps.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/slam/motion.hpp"
+#include "session_runs.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+// fr1/rpy's 100 frames mapped with loop closure: its session.
+const Session& rpySession() {
+  static const Session session = [] {
+    const std::string d =
+        std::string(RGBDMAP_TEST_TMP) + "/FleetMerger.run." + std::to_string(::getpid());
+    fs::remove_all(d);
+    fs::create_directories(d);
+    test::mapTo(test::tumDir("rgbd_dataset_freiburg1_rpy_head100"), d + "/rpy.pcd");
+    return readSession(d + "/rpy.session");
+  }();
+  return session;
+}
+
+// The session moved into another frame (a second robot starting elsewhere in the same place).
+Session movedSession(const Session& s, const Eigen::Isometry3d& frame) {
+  Session out = s;
+  for (auto& k : out.graph.keyframes) {
+    k.pose = frame * k.pose;
+    k.odometry = frame * k.odometry;
+  }
+  return out;
+}
+
+TEST(FleetMerger, ARobotOnAMappedRouteIsPlacedWhereItIs) {
+  const Session& rpy = rpySession();
+  Eigen::Isometry3d elsewhere = Eigen::Isometry3d::Identity();
+  elsewhere.linear() = Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  elsewhere.translation() = Eigen::Vector3d(2.0, 0.0, -1.0);
+  FleetMerger merger({"/robot1", "/robot2"}, Config{});
+  EXPECT_FALSE(merger.merge());  // nothing yet
+  for (const std::string& r : test::streamOf(rpy, 11))
+    EXPECT_NE(merger.receive(0, r, "/robot1/rgbdmap/session/graph"),
+              SessionAssembler::Result::kGap);
+  for (const std::string& r : test::streamOf(movedSession(rpy, elsewhere), 22))
+    merger.receive(1, r, "/robot2/rgbdmap/session/graph");
+  ASSERT_TRUE(merger.merge());
+  EXPECT_FALSE(merger.merge());  // nothing new since
+  const auto robots = merger.robots();
+  ASSERT_TRUE(robots[1].placed);
+  EXPECT_EQ(robots[1].linked_to, "/robot1");
+  EXPECT_GE(robots[1].links, 2);
+  // Robot 2's frame in robot 1's: the inverse of the move.
+  const Eigen::Isometry3d error = elsewhere * robots[1].transform;
+  EXPECT_LT(error.translation().norm(), 0.005);
+  EXPECT_LT(rotationAngle(error), 0.005);
+  EXPECT_EQ(merger.session().graph.keyframes.size(), 2 * rpy.graph.keyframes.size());
+
+  // Maps: robot 2's moved back onto robot 1's, averaged where they overlap.
+  auto map1 = std::make_shared<MapCloud>();
+  auto map2 = std::make_shared<MapCloud>();
+  for (int i = 0; i < 100; ++i) {
+    pcl::PointXYZRGB p;
+    // Within the voxels, not on their faces (a point moved there and back may cross one).
+    p.x = 0.01f * static_cast<float>(i) + 0.0025f;
+    p.y = 0.0025f;
+    p.z = 1.0025f;
+    p.r = p.g = p.b = 100;
+    map1->push_back(p);
+    const Eigen::Vector3f q = (elsewhere.cast<float>() * p.getVector3fMap());
+    pcl::PointXYZRGB p2 = p;
+    p2.getVector3fMap() = q;
+    p2.r = p2.g = p2.b = 200;
+    map2->push_back(p2);
+  }
+  merger.receiveMap(0, map1, 1e10);
+  merger.receiveMap(1, map2, 1e10);
+  merger.merge();
+  const MapCloud merged = merger.map(0.005);
+  EXPECT_GE(merged.size(), 100u);
+  EXPECT_LE(merged.size(), 120u);  // one layer, not two
+}
+
+TEST(FleetMerger, ARobotElsewhereStaysUnplacedAndARestartKeepsTheOldRun) {
+  const Session& rpy = rpySession();
+  FleetMerger merger({"/robot1", "/robot2"}, Config{});
+  for (const std::string& r : test::streamOf(rpy, 1)) merger.receive(0, r, "/robot1/x");
+  // Robot 2 saw something else: the same keyframes with places of no resemblance.
+  Session other = rpy;
+  for (auto& place : other.graph.places)
+    if (place) {
+      auto blank = std::make_shared<PlaceRecognition::Place>(*place);
+      // (A new matrix: the place's own is shared with the session, and a matrix expression
+      // would be written into it.)
+      blank->view.descriptors = cv::Mat(place->view.descriptors.size(),
+                                        place->view.descriptors.type(), cv::Scalar::all(0));
+      place = blank;
+    }
+  for (const std::string& r : test::streamOf(other, 2)) merger.receive(1, r, "/robot2/x");
+  merger.merge();
+  EXPECT_FALSE(merger.robots()[1].placed);
+  EXPECT_GT(merger.robots()[1].keyframes, 0u);
+
+  // Robot 1 restarts: a new run, the old one kept beside it.
+  for (const std::string& r : test::streamOf(rpy, 3)) merger.receive(0, r, "/robot1/x");
+  merger.merge();
+  const auto robots = merger.robots();
+  EXPECT_EQ(robots[0].runs, 2u);
+  EXPECT_EQ(robots[0].keyframes, 2 * rpy.graph.keyframes.size());
+  EXPECT_TRUE(robots[0].placed);
+  // A record that is not one is refused naming its topic; nothing changes.
+  EXPECT_THROW(merger.receive(0, "not a record", "/robot1/x"), InputError);
+}
+
+}  // namespace
+}  // namespace rgbdmap
