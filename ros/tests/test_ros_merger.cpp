@@ -48,7 +48,7 @@ class RosMerger : public ::testing::Test {
   std::unique_ptr<ros::AsyncSpinner> spinner_;
 };
 
-TEST_F(RosMerger, TwoRobotsInOneRoomBecomeOneMapAndARobotElsewhereIsReported) {
+TEST_F(RosMerger, TwoRobotsBecomeOneMapARobotElsewhereIsReportedAKilledOnesPartStays) {
   // Robot 1 walks a lap of the synthetic room; robot 2 the second half of another lap, 15 cm
   // further from the walls (it starts on the far side); robot 3 is at a real desk elsewhere.
   const std::string first = sharedSynthetic("walk_lap_seed1", " --path walk --frames 360 --seed 1");
@@ -86,16 +86,20 @@ TEST_F(RosMerger, TwoRobotsInOneRoomBecomeOneMapAndARobotElsewhereIsReported) {
     ASSERT_TRUE(waitUntil(
         [&] { return buffer.canTransform("merged_map", "robot2/map", ros::Time(0)); }, 30));
   }
+  geometry_msgs::TransformStamped published;
+  if (kRealTime) published = buffer.lookupTransform("merged_map", "robot2/map", ros::Time(0));
+  // Robot 2 dies (killed: no final save, its stream stops): its part stays in the merged map and
+  // the others go on.
+  nodes[1]->signal(SIGKILL);
+  nodes[1]->wait(60);
   std_srvs::Trigger save;
   ASSERT_TRUE(ros::service::call("/rgbdmap_merger/save_map", save))
       << readFile(dir_ + "/merger.log");
   EXPECT_TRUE(save.response.success) << save.response.message;
-  geometry_msgs::TransformStamped published;
-  if (kRealTime) published = buffer.lookupTransform("merged_map", "robot2/map", ros::Time(0));
-
-  for (auto& node : nodes) node->signal(SIGINT);
-  for (std::size_t i = 0; i < nodes.size(); ++i)
+  for (std::size_t i : {0u, 2u}) {
+    nodes[i]->signal(SIGINT);
     ASSERT_EQ(nodes[i]->wait(60), 0) << readFile(dir_ + "/" + robots[i] + "/node.log");
+  }
   merger.signal(SIGINT);
   ASSERT_EQ(merger.wait(60), 0) << readFile(dir_ + "/merger.log");
   const std::string log = readFile(dir_ + "/merger.log");
