@@ -1,10 +1,12 @@
 #include "session_runs.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -25,6 +27,18 @@ void mapTo(const std::string& sequence, const std::string& map) {
             0)
       << output;
   ASSERT_TRUE(fs::is_directory(sessionPathOf(map))) << output;
+}
+
+const Session& mappedSession(const std::string& tum_name) {
+  static std::map<std::string, Session> sessions;
+  const auto found = sessions.find(tum_name);
+  if (found != sessions.end()) return found->second;
+  const std::string dir =
+      std::string(RGBDMAP_TEST_TMP) + "/mapped." + tum_name + "." + std::to_string(::getpid());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  mapTo(tumDir(tum_name), dir + "/map.pcd");
+  return sessions.emplace(tum_name, readSession(dir + "/map.session")).first->second;
 }
 
 namespace {

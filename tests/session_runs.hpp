@@ -17,6 +17,10 @@ namespace rgbdmap::test {
 // `map`, MAP.session and the trajectories beside it.
 void mapTo(const std::string& sequence, const std::string& map);
 
+// The session of `sequence` (a shared TUM folder's name) mapped by mapTo(), once per test process
+// (CTest runs each test in a process of its own, in parallel: each maps into a folder of its own).
+const Session& mappedSession(const std::string& tum_name);
+
 struct SessionRun {
   int code = 0;
   std::string log, stats;  // the output, and --stats' JSON (checked to parse)

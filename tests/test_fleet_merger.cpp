@@ -3,9 +3,6 @@
 // merged map averages what overlaps.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/runtime/fleet_merger.hpp"
@@ -16,20 +13,7 @@
 namespace rgbdmap {
 namespace {
 
-namespace fs = std::filesystem;
-
-// fr1/rpy's 100 frames mapped with loop closure: its session.
-const Session& rpySession() {
-  static const Session session = [] {
-    const std::string d =
-        std::string(RGBDMAP_TEST_TMP) + "/FleetMerger.run." + std::to_string(::getpid());
-    fs::remove_all(d);
-    fs::create_directories(d);
-    test::mapTo(test::tumDir("rgbd_dataset_freiburg1_rpy_head100"), d + "/rpy.pcd");
-    return readSession(d + "/rpy.session");
-  }();
-  return session;
-}
+const Session& rpySession() { return test::mappedSession("rgbd_dataset_freiburg1_rpy_head100"); }
 
 // The session moved into another frame (a second robot starting elsewhere in the same place).
 Session movedSession(const Session& s, const Eigen::Isometry3d& frame) {

@@ -2,39 +2,17 @@
 // is found where the graph says it is, and views of other things are not matched.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
 
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/slam/motion.hpp"
 #include "rgbdmap/slam/place_matcher.hpp"
+#include "session_runs.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
 namespace {
 
-namespace fs = std::filesystem;
-
-// fr1/rpy's 100 frames mapped with loop closure: the session's places and graph.
-const Session& rpySession() {
-  static const Session session = [] {
-    const std::string d =
-        std::string(RGBDMAP_TEST_TMP) + "/PlaceMatcher.run." + std::to_string(::getpid());
-    fs::remove_all(d);
-    fs::create_directories(d);
-    std::string output;
-    EXPECT_EQ(test::run(test::binary() + " --source tum:" +
-                            test::tumDir("rgbd_dataset_freiburg1_rpy_head100") + " --out " + d +
-                            "/map.pcd --no-render --viewer none --rate max --set "
-                            "pose.source=odometry",
-                        &output),
-              0)
-        << output;
-    return readSession(d + "/map.session");
-  }();
-  return session;
-}
+const Session& rpySession() { return test::mappedSession("rgbd_dataset_freiburg1_rpy_head100"); }
 
 // A place with every point (features and dense reference) moved by `motion`: the same spot seen
 // from a camera at motion^-1.

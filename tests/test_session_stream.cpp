@@ -3,39 +3,19 @@
 // and a damaged or foreign record is refused naming where it came from.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstring>
-#include <filesystem>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/session_stream.hpp"
+#include "session_runs.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
 namespace {
 
-namespace fs = std::filesystem;
-
-// fr1/rpy's 100 frames mapped with loop closure, once: its saved session.
-const Session& savedSession() {
-  static const Session session = [] {
-    const std::string d =
-        std::string(RGBDMAP_TEST_TMP) + "/SessionStream.run." + std::to_string(::getpid());
-    fs::remove_all(d);
-    fs::create_directories(d);
-    std::string output;
-    const int code = test::run(
-        test::binary() + " --source tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100") +
-            " --out " + d +
-            "/map.pcd --no-render --viewer none --rate max --set pose.source=odometry",
-        &output);
-    EXPECT_EQ(code, 0) << output;
-    return readSession(d + "/map.session");
-  }();
-  return session;
-}
+const Session& savedSession() { return test::mappedSession("rgbd_dataset_freiburg1_rpy_head100"); }
 
 // A loop closer going on from the saved session: its graph and places are the session's.
 struct Robot {

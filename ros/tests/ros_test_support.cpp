@@ -32,6 +32,23 @@ int freePort() {
 
 }  // namespace
 
+void RosTest::SetUp() {
+  dir_ = freshDir();
+  core_ = std::make_unique<Roscore>(dir_);
+  int argc = 0;
+  ros::init(argc, nullptr, "rgbdmap_test_consumer", ros::init_options::NoSigintHandler);
+  nh_ = std::make_unique<ros::NodeHandle>();
+  spinner_ = std::make_unique<ros::AsyncSpinner>(2);
+  spinner_->start();
+}
+
+void RosTest::TearDown() {
+  spinner_->stop();
+  nh_.reset();
+  ros::shutdown();
+  core_.reset();
+}
+
 std::string nodeBinary() { return RGBDMAP_NODE_BINARY; }
 std::string mergerBinary() { return RGBDMAP_MERGER_BINARY; }
 std::string tum2bagBinary() { return RGBDMAP_TUM2BAG_BINARY; }

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,6 +41,18 @@ std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
 // The node took every image played: after the bag ends its last images are paired, and the
 // camera is reported silent (the pipeline checkpoints and waits for it).
 bool waitUntilSilent(const std::string& node_log);
+
+// A test with a roscore of its own (in a fresh folder, freshDir()), this process a ROS node
+// ("rgbdmap_test_consumer") spinning on two threads.
+class RosTest : public ::testing::Test {
+ protected:
+  void SetUp() override;
+  void TearDown() override;
+  std::string dir_;
+  std::unique_ptr<Roscore> core_;
+  std::unique_ptr<ros::NodeHandle> nh_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
 
 std::string nodeBinary();
 std::string mergerBinary();

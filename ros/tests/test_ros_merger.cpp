@@ -25,28 +25,7 @@ constexpr bool kRealTime = false;  // the nodes drop most frames: too few places
 constexpr bool kRealTime = true;
 #endif
 
-class RosMerger : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = freshDir();
-    core_ = std::make_unique<Roscore>(dir_);
-    int argc = 0;
-    ros::init(argc, nullptr, "rgbdmap_test_merger", ros::init_options::NoSigintHandler);
-    nh_ = std::make_unique<ros::NodeHandle>();
-    spinner_ = std::make_unique<ros::AsyncSpinner>(2);
-    spinner_->start();
-  }
-  void TearDown() override {
-    spinner_->stop();
-    nh_.reset();
-    ros::shutdown();
-    core_.reset();
-  }
-  std::string dir_;
-  std::unique_ptr<Roscore> core_;
-  std::unique_ptr<ros::NodeHandle> nh_;
-  std::unique_ptr<ros::AsyncSpinner> spinner_;
-};
+class RosMerger : public RosTest {};
 
 TEST_F(RosMerger, TwoRobotsBecomeOneMapARobotElsewhereIsReportedAKilledOnesPartStays) {
   // Robot 1 walks a lap of the synthetic room; robot 2 the second half of another lap, 15 cm

@@ -104,23 +104,8 @@ void expectEveryFrameAccountedFor(const std::string& stats_path, double pairs_in
   EXPECT_GT(mapped, 0) << stats;
 }
 
-class RosNode : public ::testing::Test {
+class RosNode : public RosTest {
  protected:
-  void SetUp() override {
-    dir_ = freshDir();
-    core_ = std::make_unique<Roscore>(dir_);
-    int argc = 0;
-    ros::init(argc, nullptr, "rgbdmap_test_consumer", ros::init_options::NoSigintHandler);
-    nh_ = std::make_unique<ros::NodeHandle>();
-    spinner_ = std::make_unique<ros::AsyncSpinner>(2);
-    spinner_->start();
-  }
-  void TearDown() override {
-    spinner_->stop();
-    nh_.reset();
-    ros::shutdown();
-    core_.reset();
-  }
   // Runs the node with `params` (and ~stats: dir_/stats.json) while fr1/xyz's bag plays at the
   // recorded rate, stops it once it has gone quiet, and returns its log. A node started from a
   // saved session: a sanitizer build drops most frames at the recorded rate and may never
@@ -143,10 +128,6 @@ class RosNode : public ::testing::Test {
           << log;
     return log;
   }
-  std::string dir_;
-  std::unique_ptr<Roscore> core_;
-  std::unique_ptr<ros::NodeHandle> nh_;
-  std::unique_ptr<ros::AsyncSpinner> spinner_;
 };
 
 TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {

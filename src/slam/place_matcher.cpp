@@ -2,12 +2,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
 #include <opencv2/features2d.hpp>
 #include <unordered_map>
 
 #include "rgbdmap/slam/motion.hpp"
+#include "rgbdmap/tracking/relocaliser.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -215,23 +214,11 @@ std::optional<LoopMeasurement> PlaceMatcher::match(const PlaceRecognition::Place
     image.emplace_back(static_cast<float>(camera_.fx * q.x / q.z + camera_.cx),
                        static_cast<float>(camera_.fy * q.y / q.z + camera_.cy));
   }
-  if (static_cast<int>(object.size()) < loop_.min_inliers) return std::nullopt;
-  cv::Mat rvec, tvec, R;
-  std::vector<int> inlier_rows;
-  if (!cv::solvePnPRansac(object, image, camera_.cameraMatrix(), cv::noArray(), rvec, tvec, false,
-                          200, 3.0f, 0.99, inlier_rows, cv::SOLVEPNP_EPNP) ||
-      static_cast<int>(inlier_rows.size()) < loop_.min_inliers)
-    return std::nullopt;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d r;
-  Eigen::Vector3d t;
-  cv::cv2eigen(R, r);
-  cv::cv2eigen(tvec, t);
-  if (!r.allFinite() || !t.allFinite()) return std::nullopt;
-  Eigen::Isometry3d candidate_in_query = Eigen::Isometry3d::Identity();
-  candidate_in_query.linear() = r;
-  candidate_in_query.translation() = t;
-  const Eigen::Isometry3d by_features = candidate_in_query.inverse();  // X_cand^-1 X_query
+  int inliers = 0;
+  const std::optional<Eigen::Isometry3d> candidate_in_query =
+      solvePnp(object, image, camera_, false, loop_.min_inliers, &inliers);
+  if (!candidate_in_query) return std::nullopt;
+  const Eigen::Isometry3d by_features = candidate_in_query->inverse();  // X_cand^-1 X_query
   if (by_features.translation().norm() > loop_.max_distance) return std::nullopt;
 
   const Points query_points = surfaceOf(query.reference, options_.max_points);
@@ -251,7 +238,7 @@ std::optional<LoopMeasurement> PlaceMatcher::match(const PlaceRecognition::Place
   loop.later_in_earlier = aligned.pose;
   loop.information = aligned.information;
   loop.matches = static_cast<int>(matches.size());
-  loop.inliers = static_cast<int>(inlier_rows.size());
+  loop.inliers = inliers;
   loop.overlap = overlap;
   return loop;
 }

@@ -113,12 +113,20 @@ std::optional<Eigen::Isometry3d> Relocaliser::locate(const RelocalisationView& k
     object.push_back(keyframe.points[static_cast<std::size_t>(m.queryIdx)]);
     image.push_back(current_keypoints_[static_cast<std::size_t>(m.trainIdx)].pt);
   }
-  if (static_cast<int>(object.size()) < min_inliers_) return std::nullopt;
+  return solvePnp(object, image, camera_, true, min_inliers_, inliers);
+}
+
+std::optional<Eigen::Isometry3d> solvePnp(const std::vector<cv::Point3f>& object,
+                                          const std::vector<cv::Point2f>& image,
+                                          const CameraIntrinsics& camera, bool distorted,
+                                          int min_inliers, int* inliers) {
+  if (static_cast<int>(object.size()) < min_inliers) return std::nullopt;
   cv::Mat rvec, tvec;
   std::vector<int> inlier_rows;
-  if (!cv::solvePnPRansac(object, image, camera_.cameraMatrix(), camera_.distortion(), rvec, tvec,
-                          false, 200, 3.0f, 0.99, inlier_rows, cv::SOLVEPNP_EPNP) ||
-      static_cast<int>(inlier_rows.size()) < min_inliers_)
+  const cv::Mat distortion = distorted ? cv::Mat(camera.distortion()) : cv::Mat();
+  if (!cv::solvePnPRansac(object, image, camera.cameraMatrix(), distortion, rvec, tvec, false, 200,
+                          3.0f, 0.99, inlier_rows, cv::SOLVEPNP_EPNP) ||
+      static_cast<int>(inlier_rows.size()) < min_inliers)
     return std::nullopt;
   if (inliers) *inliers = static_cast<int>(inlier_rows.size());
   cv::Mat R;

@@ -21,6 +21,15 @@ struct RelocalisationView {
   cv::Mat descriptors;
 };
 
+// PnP RANSAC as relocalisation and loop closure run it (EPnP, 200 iterations, 3 pixels): the
+// motion mapping `object` points into the camera that saw them at `image` (raw pixels when
+// `distorted`, else already undistorted), when at least `min_inliers` agree (`inliers`, if given,
+// receives how many did).
+std::optional<Eigen::Isometry3d> solvePnp(const std::vector<cv::Point3f>& object,
+                                          const std::vector<cv::Point2f>& image,
+                                          const CameraIntrinsics& camera, bool distorted,
+                                          int min_inliers, int* inliers = nullptr);
+
 // Finds where the camera is relative to a keyframe from ORB feature matches and PnP RANSAC
 // (OpenCV), independent of any prior: the way back after tracking was lost.
 class Relocaliser {
