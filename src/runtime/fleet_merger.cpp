@@ -32,7 +32,7 @@ SessionAssembler::Result FleetMerger::receive(std::size_t index, const std::stri
     part = parts_.back().get();
     part->robot = index;
     part->run = *run;
-    if (++robots_[index].runs > 1)
+    if (++robots_.at(index).runs > 1)
       spdlog::info("merger: {} restarted (run {}): its new run is placed again, the old one stays",
                    robots_[index].name, *run);
   }
@@ -57,6 +57,7 @@ void FleetMerger::receiveMap(std::size_t index, std::shared_ptr<const MapCloud> 
 }
 
 bool FleetMerger::merge() {
+  const std::lock_guard<std::mutex> one_at_a_time(merging_);
   // The parts to merge, the first robot's first run first (its frame is the merged one).
   std::vector<Part*> order;
   std::vector<Session> sessions;

@@ -61,6 +61,7 @@ class FleetMerger {
   };
 
   Config settings_;
+  std::mutex merging_;  // one merge at a time (the loop's and a save's), the newest written last
   mutable std::mutex mutex_;
   std::vector<Robot> robots_;
   std::vector<std::unique_ptr<Part>> parts_;  // in arrival order; the first robot's first first
