@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/runtime/map_piece.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/session_stream.hpp"
 #include "test_support.hpp"
@@ -120,7 +121,15 @@ std::vector<std::string> streamOf(const Session& saved, std::uint64_t run) {
   RunStats stats;
   LoopCloser robot(saved.camera, TrackingOptions{}, LoopOptions{}, 0.3, 4.0, corrections, stats,
                    true, &saved.graph);
-  SessionStream stream(run, saved.camera, SessionStream::Options{1e12, 1.0});
+  SessionStream stream(run, saved.camera, SessionStream::Options{1e12, 1.0, 1e12});
+  // The kept keyframes as the robot's map pieces.
+  KeyframeStore decoder(0);
+  Frame keyframe, piece;
+  for (const KeyframeStore::Entry& kept : saved.keyframes) {
+    decoder.decode(kept, keyframe);
+    makeMapPiece(keyframe, piece);
+    stream.addPiece(piece);
+  }
   std::vector<std::string> records;
   for (SessionStream::Record& r : stream.take(robot, 0.0)) records.push_back(std::move(r.bytes));
   return records;
@@ -130,8 +139,8 @@ Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& 
   return absoluteTrajectoryError(Trajectory::load(keyframes), Trajectory::load(truth)).alignment;
 }
 
-double precisionOf(const std::string& map, const std::string& scene,
-                   const std::string& trajectory) {
+std::string scoreOf(const std::string& map, const std::string& scene,
+                    const std::string& trajectory) {
   const std::string json = map + ".score.json";
   std::string output;
   EXPECT_EQ(run(binary() + " evaluate map " + map + " --scene " + scene + " --trajectory " +
@@ -139,7 +148,12 @@ double precisionOf(const std::string& map, const std::string& scene,
                 &output),
             0)
       << output;
-  return jsonNumber(readFile(json), "precision");
+  return readFile(json);
+}
+
+double precisionOf(const std::string& map, const std::string& scene,
+                   const std::string& trajectory) {
+  return jsonNumber(scoreOf(map, scene, trajectory), "precision");
 }
 
 }  // namespace rgbdmap::test

@@ -50,8 +50,8 @@ std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms
 std::size_t mergedPoints(const std::string& first, const std::string& second,
                          const std::string& out);
 
-// The records a robot streams of `saved` (its graph and places: SessionStream, no budget) as run
-// `run`: what a fleet's merger receives of it.
+// The records a robot streams of `saved` (its graph, places and its kept keyframes as map
+// pieces: SessionStream, no budget) as run `run`: what a fleet's merger receives of it.
 std::vector<std::string> streamOf(const Session& saved, std::uint64_t run);
 
 // Where a run's frame lies in its scene: its keyframes (a TUM trajectory file) aligned to the
@@ -61,5 +61,8 @@ Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& 
 // `rgbdmap evaluate map`'s precision at 1 cm of an odometry map, moved by `trajectory`'s
 // alignment to the scene's ground truth.
 double precisionOf(const std::string& map, const std::string& scene, const std::string& trajectory);
+// The same evaluation's whole score (its JSON: precision, recall, distances).
+std::string scoreOf(const std::string& map, const std::string& scene,
+                    const std::string& trajectory);
 
 }  // namespace rgbdmap::test

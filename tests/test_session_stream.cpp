@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/map_piece.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/session_stream.hpp"
 #include "session_runs.hpp"
@@ -80,6 +82,62 @@ TEST(SessionStream, AMergerAssemblesTheRobotsGraphAndPlaces) {
   EXPECT_EQ(merger.places(), places);
   // Nothing new: nothing sent.
   EXPECT_TRUE(stream.take(robot.closer, 1.0).empty());
+}
+
+TEST(SessionStream, MapPiecesGoOnceTheirAnchorHasAndArriveWhole) {
+  const Session& saved = savedSession();
+  ASSERT_GE(saved.keyframes.size(), 5u);
+  Robot robot(saved);
+  SessionStream stream(3, saved.camera, SessionStream::Options{1e12, 1.0, 1e12});
+  KeyframeStore decoder(0);
+  Frame keyframe, piece;
+  for (const KeyframeStore::Entry& kept : saved.keyframes) {
+    decoder.decode(kept, keyframe);
+    makeMapPiece(keyframe, piece);
+    stream.addPiece(piece);
+  }
+  // One tracked from a keyframe the graph has not sent: it waits.
+  piece.index = saved.keyframes.back().index + 1;
+  piece.anchor = static_cast<std::int64_t>(saved.graph.keyframes.size());
+  stream.addPiece(piece);
+  SessionAssembler merger;
+  for (const SessionStream::Record& r : stream.take(robot.closer, 0.0))
+    EXPECT_NE(merger.apply(r.bytes, "/robot1/session"), SessionAssembler::Result::kGap);
+  ASSERT_EQ(merger.pieces(), saved.keyframes.size());
+  EXPECT_EQ(stream.totals().pieces, saved.keyframes.size());
+  const std::vector<KeyframeStore::Entry> got = merger.mapPieces();
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].index, saved.keyframes[i].index);
+    EXPECT_EQ(got[i].anchor, saved.keyframes[i].anchor);
+    EXPECT_TRUE(samePose(got[i].pose, saved.keyframes[i].pose));
+  }
+  // A piece is its keyframe at half resolution: every second depth pixel, to the stored steps.
+  const KeyframeStore::Entry& middle = saved.keyframes[saved.keyframes.size() / 2];
+  decoder.decode(middle, keyframe);
+  Frame arrived;
+  decoder.decode(got[saved.keyframes.size() / 2], arrived);
+  ASSERT_EQ(arrived.depth.cols, keyframe.depth.cols / 2);
+  ASSERT_EQ(arrived.depth.rows, keyframe.depth.rows / 2);
+  std::size_t same = 0, measured = 0;
+  for (int v = 0; v < arrived.depth.rows; ++v)
+    for (int u = 0; u < arrived.depth.cols; ++u) {
+      const float z = keyframe.depth.at<float>(2 * v, 2 * u);
+      if (z <= 0.0f) continue;
+      ++measured;
+      same += std::abs(arrived.depth.at<float>(v, u) - z) < 1e-4f * z;
+    }
+  EXPECT_GT(measured, 10000u);
+  EXPECT_EQ(same, measured);
+  const CameraIntrinsics half = mapPieceCamera(saved.camera);
+  EXPECT_EQ(half.width, arrived.depth.cols);
+  EXPECT_DOUBLE_EQ(half.fx, saved.camera.fx / 2);
+
+  // Sent again (a merger asked): the same pieces, none twice.
+  stream.restart();
+  for (const SessionStream::Record& r : stream.take(robot.closer, 1.0))
+    merger.apply(r.bytes, "/robot1/session");
+  EXPECT_EQ(merger.pieces(), saved.keyframes.size());
+  EXPECT_EQ(stream.totals().pieces, 2 * saved.keyframes.size());
 }
 
 TEST(SessionStream, StaysWithinItsByteBudget) {

@@ -1,8 +1,9 @@
-// rgbdmap_merger: one map of a fleet. Subscribes to the session stream and the map of every
-// robot in ~robots (the namespaces their rgbdmap_node runs in), places the robots in the first
-// one's frame by the places they share, and publishes the merged map (/merged/map, latched, at
-// most every ~map_interval s) and TF ~merged_frame -> <robot>/map for every placed robot;
-// ~save_map writes the merged map and session. Robots never wait for it.
+// rgbdmap_merger: one map of a fleet. Subscribes to the session stream of every robot in ~robots
+// (the namespaces their rgbdmap_node runs in: graph, places and map pieces), places the robots in
+// the first one's frame by the places they share, fuses their map pieces at the merged poses, and
+// publishes the merged map (/merged/map, latched, at most every ~map_interval s) and TF
+// ~merged_frame -> <robot>/map for every placed robot; ~save_map writes the merged map and
+// session. Robots never wait for it.
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -34,7 +35,7 @@ struct Settings {
   std::string config = "default";
   double map_interval = 2.0;
   double merge_interval = 1.0;
-  double voxel = 0.005;
+  double voxel = 0.0;  // the merged map's; 0: the configuration's map.voxel_size
 };
 
 // ~robots: a list of strings, or one string of names separated by spaces or commas.
@@ -70,18 +71,18 @@ Settings readSettings(const ros::NodeHandle& pnh) {
   pnh.param("map_interval", s.map_interval, s.map_interval);
   pnh.param("merge_interval", s.merge_interval, s.merge_interval);
   pnh.param("voxel", s.voxel, s.voxel);
-  if (!(s.merge_interval > 0) || !(s.map_interval >= 0) || !(s.voxel > 0))
+  if (!(s.merge_interval > 0) || !(s.map_interval >= 0) || !(s.voxel >= 0))
     throw InputError("parameters " + pnh.resolveName("merge_interval") + ", " +
                      pnh.resolveName("map_interval") + " and " + pnh.resolveName("voxel") +
-                     ": must be > 0, >= 0 and > 0");
+                     ": must be > 0, >= 0 and >= 0");
   return s;
 }
 
 std::string frameOf(const std::string& robot) { return robot.substr(1) + "/map"; }
 
 // The merged map and session, written beside each other; the answer says where or why not.
-bool save(const FleetMerger& merger, const Settings& s, std::string& message) {
-  const MapCloud map = merger.map(s.voxel);
+bool save(FleetMerger& merger, const Settings& s, std::string& message) {
+  const MapCloud map = merger.map();
   const Session session = merger.session();
   const std::string session_path =
       (std::filesystem::path(s.out).replace_extension(".session")).string();
@@ -113,6 +114,7 @@ int runMerger() {
   const Settings s = readSettings(pnh);
   Config config;
   config.loadPreset(s.config);
+  if (s.voxel > 0) config.map.voxel_size = s.voxel;
   FleetMerger merger(s.robots, config);
 
   std::atomic<bool> resend_wanted[64];
@@ -120,7 +122,8 @@ int runMerger() {
   for (auto& w : resend_wanted) w.store(true);  // a merger that starts late asks for everything
   std::vector<ros::Subscriber> subscribers;
   for (std::size_t i = 0; i < s.robots.size(); ++i) {
-    for (const char* topic : {"/rgbdmap/session/graph", "/rgbdmap/session/places"}) {
+    for (const char* topic :
+         {"/rgbdmap/session/graph", "/rgbdmap/session/places", "/rgbdmap/session/pieces"}) {
       const std::string name = s.robots[i] + topic;
       subscribers.push_back(nh.subscribe<std_msgs::UInt8MultiArray>(
           name, 1000, [&, i, name](const std_msgs::UInt8MultiArray::ConstPtr& m) {
@@ -133,17 +136,6 @@ int runMerger() {
             }
           }));
     }
-    const std::string map_topic = s.robots[i] + "/rgbdmap/map";
-    subscribers.push_back(nh.subscribe<sensor_msgs::PointCloud2>(
-        map_topic, 1, [&, i, map_topic](const sensor_msgs::PointCloud2::ConstPtr& m) {
-          auto map = std::make_shared<MapCloud>();
-          std::string error;
-          if (!fromCloudMessage(*m, *map, error)) {
-            spdlog::warn("merger: {}: {} (map ignored)", map_topic, error);
-            return;
-          }
-          merger.receiveMap(i, std::move(map), m->header.stamp.toSec());
-        }));
   }
   ros::Publisher map_pub = nh.advertise<sensor_msgs::PointCloud2>("/merged/map", 1, true);
   tf2_ros::TransformBroadcaster tf;
@@ -195,7 +187,7 @@ int runMerger() {
       tf.sendTransform(t);
     }
     if (changed && ros::WallTime::now() >= next_map) {
-      map_pub.publish(toCloudMessage(merger.map(s.voxel), s.merged_frame, now.toSec()));
+      map_pub.publish(toCloudMessage(merger.map(), s.merged_frame, now.toSec()));
       next_map = ros::WallTime::now() + ros::WallDuration(s.map_interval);
     }
     ros::WallDuration(s.merge_interval).sleep();

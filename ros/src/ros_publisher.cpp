@@ -45,6 +45,10 @@ void RosPublisher::attachGraph(const LoopCloser* graph, const CameraIntrinsics& 
   if (session_) session_->attach(graph, camera);
 }
 
+void RosPublisher::publishKeyframe(const Frame& keyframe) {
+  if (session_) session_->addKeyframe(keyframe);
+}
+
 RosPublisher::~RosPublisher() { finish(); }
 
 void RosPublisher::finish() {

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "rgbdmap/base/steady_time.hpp"
+#include "rgbdmap/runtime/map_piece.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -27,6 +28,7 @@ SessionPublisher::SessionPublisher(ros::NodeHandle& private_nh, Options options)
   // Not latched and deep: every record counts (a lost one makes the merger ask again).
   graph_pub_ = private_nh.advertise<std_msgs::UInt8MultiArray>("session/graph", 100);
   places_pub_ = private_nh.advertise<std_msgs::UInt8MultiArray>("session/places", 100);
+  pieces_pub_ = private_nh.advertise<std_msgs::UInt8MultiArray>("session/pieces", 100);
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -46,16 +48,23 @@ void SessionPublisher::attach(const LoopCloser* graph, const CameraIntrinsics& c
     stream_ = std::make_unique<SessionStream>(run_, camera, options_.stream);
     started_ = steadySeconds();
   }
+  attached_.store(graph != nullptr);
   if (!graph && graph_ && stream_) {
     // What the budget still allows goes out before the graph is let go.
     send(steadySeconds());
     totals_ = stream_->totals();
+    std::uint64_t dropped = 0;
+    {
+      std::lock_guard<std::mutex> incoming(incoming_mutex_);
+      dropped = pieces_dropped_;
+    }
     const double seconds = std::max(1e-3, steadySeconds() - started_);
     spdlog::info(
-        "session stream: {} keyframes, {} edges and {} places sent, {:.1f} MB in {:.0f} s "
-        "({:.0f} KB/s)",
-        totals_.keyframes, totals_.edges, totals_.places, totals_.bytes / 1e6, seconds,
-        totals_.bytes / 1e3 / seconds);
+        "session stream: {} keyframes, {} edges, {} places and {} map pieces ({:.1f} MB) sent, "
+        "{:.1f} MB in {:.0f} s ({:.0f} KB/s){}",
+        totals_.keyframes, totals_.edges, totals_.places, totals_.pieces, totals_.piece_bytes / 1e6,
+        totals_.bytes / 1e6, seconds, totals_.bytes / 1e3 / seconds,
+        dropped > 0 ? fmt::format("; {} keyframes not sent (the queue was full)", dropped) : "");
   }
   graph_ = graph;
   wake_.notify_all();
@@ -66,7 +75,27 @@ SessionStream::Totals SessionPublisher::totals() const {
   return stream_ ? stream_->totals() : totals_;
 }
 
+void SessionPublisher::addKeyframe(const Frame& keyframe) {
+  if (!attached_.load()) return;
+  // Deep enough for the keyframes of a few intervals; a stalled publisher thread costs at most
+  // this many small images.
+  constexpr std::size_t kMaxQueued = 32;
+  std::lock_guard<std::mutex> lock(incoming_mutex_);
+  if (incoming_.size() >= kMaxQueued) {
+    incoming_.pop_front();
+    ++pieces_dropped_;
+  }
+  incoming_.emplace_back();
+  makeMapPiece(keyframe, incoming_.back());
+}
+
 void SessionPublisher::send(double now) {
+  std::deque<Frame> pieces;
+  {
+    std::lock_guard<std::mutex> lock(incoming_mutex_);
+    pieces.swap(incoming_);
+  }
+  for (const Frame& piece : pieces) stream_->addPiece(piece);
   if (resend_.exchange(false)) {
     stream_->restart();
     spdlog::info("session stream: sending the session again from its first keyframe");
@@ -74,7 +103,17 @@ void SessionPublisher::send(double now) {
   for (SessionStream::Record& record : stream_->take(*graph_, now)) {
     std_msgs::UInt8MultiArray msg;
     msg.data.assign(record.bytes.begin(), record.bytes.end());
-    (record.kind == SessionStream::Record::Kind::kGraph ? graph_pub_ : places_pub_).publish(msg);
+    switch (record.kind) {
+      case SessionStream::Record::Kind::kGraph:
+        graph_pub_.publish(msg);
+        break;
+      case SessionStream::Record::Kind::kPlace:
+        places_pub_.publish(msg);
+        break;
+      case SessionStream::Record::Kind::kPiece:
+        pieces_pub_.publish(msg);
+        break;
+    }
   }
 }
 

@@ -64,7 +64,7 @@ void KeyframeStore::letGo(std::size_t i) {
       findNearest(j);
 }
 
-std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Isometry3d& fused_at) {
+KeyframeStore::Entry KeyframeStore::encode(const Frame& frame, const Eigen::Isometry3d& fused_at) {
   Entry e;
   e.timestamp = frame.timestamp;
   e.index = frame.index;
@@ -86,6 +86,14 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
   colour_png.shrink_to_fit();
   e.depth_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(depth_png));
   e.colour_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(colour_png));
+  return e;
+}
+
+std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Isometry3d& fused_at) {
+  return add(encode(frame, fused_at));
+}
+
+std::vector<std::size_t> KeyframeStore::add(Entry e) {
   bytes_ += e.imageBytes();
   e.nearest = std::numeric_limits<double>::infinity();
   for (Entry& other : entries_) {

@@ -2,14 +2,17 @@
 
 #include <spdlog/spdlog.h>
 
-#include <unordered_map>
+#include <algorithm>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/map_piece.hpp"
 
 namespace rgbdmap {
 
 FleetMerger::FleetMerger(std::vector<std::string> robots, const Config& settings)
     : settings_(settings) {
+  settings_.filter.edge_jump *= kMapPieceStep;
+  settings_.filter.smooth_radius = (settings_.filter.smooth_radius + 1) / kMapPieceStep;
   for (std::string& name : robots) {
     Robot robot;
     robot.name = std::move(name);
@@ -38,22 +41,9 @@ SessionAssembler::Result FleetMerger::receive(std::size_t index, const std::stri
   }
   const SessionAssembler::Result result = part->stream.apply(record, source);
   changed_ = changed_ || result != SessionAssembler::Result::kGap;
+  // Keyframes are numbered for the merged map's corrections as they arrive, once for good.
+  while (part->slots.size() < part->stream.keyframes()) part->slots.push_back(slots_++);
   return result;
-}
-
-void FleetMerger::receiveMap(std::size_t index, std::shared_ptr<const MapCloud> map, double stamp) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  Part* target = nullptr;
-  for (auto& p : parts_) {
-    if (p->robot != index) continue;
-    const Session s = p->stream.session();
-    // The run whose keyframes began before the map was made (the newest such).
-    if (!target || s.graph.keyframes.empty() || s.graph.keyframes.front().timestamp <= stamp)
-      target = p.get();
-  }
-  if (!target) return;  // no stream from it yet: the map has no place
-  target->map = std::move(map);
-  changed_ = true;
 }
 
 bool FleetMerger::merge() {
@@ -77,24 +67,38 @@ bool FleetMerger::merge() {
   merged.created_by = "rgbdmap merger";
 
   std::lock_guard<std::mutex> lock(mutex_);
-  merged_ = std::move(merged);
+  // Each placed keyframe's correction (merged pose times its odometry's inverse), by slot.
+  // A run this merge did not place (it was before) keeps where it was.
+  const std::shared_ptr<const PoseCorrections::Table> before = corrections_.snapshot().table;
+  PoseCorrections::Table table = before ? *before : PoseCorrections::Table{};
+  table.resize(static_cast<std::size_t>(slots_), Eigen::Isometry3d::Identity());
   for (std::size_t i = 0; i < order.size(); ++i) {
     order[i]->placed = placements[i].placed;
     order[i]->placement = placements[i];
+    order[i]->merged_keyframes = placements[i].placed ? sessions[i].graph.keyframes.size() : 0;
+    if (!placements[i].placed) continue;
+    for (std::size_t k = 0; k < sessions[i].graph.keyframes.size(); ++k) {
+      const auto& node = merged.graph.keyframes[placements[i].first_keyframe + k];
+      table[static_cast<std::size_t>(order[i]->slots[k])] = node.pose * node.odometry.inverse();
+    }
   }
+  corrections_.publish(std::move(table));
+  merged_ = std::move(merged);
   for (std::size_t robot = 0; robot < robots_.size(); ++robot) {
     Robot& r = robots_[robot];
     // A robot is where its newest run is (its TF frame is that run's).
     const Part* newest = nullptr;
-    std::size_t keyframes = 0, places = 0;
+    std::size_t keyframes = 0, places = 0, pieces = 0;
     for (std::size_t i = 0; i < order.size(); ++i) {
       if (order[i]->robot != robot) continue;
       newest = order[i];
       keyframes += order[i]->stream.keyframes();
       places += order[i]->stream.places();
+      pieces += order[i]->stream.pieces();
     }
     r.keyframes = keyframes;
     r.places = places;
+    r.pieces = pieces;
     const bool was_placed = r.placed;
     r.placed = newest && newest->placed;
     if (!r.placed) continue;
@@ -118,45 +122,53 @@ Session FleetMerger::session() const {
   return merged_;
 }
 
-MapCloud FleetMerger::map(double voxel) const {
-  struct Cell {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Vector3d colour = Eigen::Vector3d::Zero();
-    int count = 0;
+MapCloud FleetMerger::map() {
+  const std::lock_guard<std::mutex> one_at_a_time(mapping_);
+  struct Due {
+    CameraIntrinsics camera;
+    KeyframeStore::Entry piece;
   };
-  std::unordered_map<std::int64_t, Cell> cells;
-  const auto key = [voxel](const Eigen::Vector3d& p) {
-    const Eigen::Vector3i c = (p / voxel).array().floor().cast<int>();
-    return (static_cast<std::int64_t>(c.x() & 0x1fffff) << 42) |
-           (static_cast<std::int64_t>(c.y() & 0x1fffff) << 21) | (c.z() & 0x1fffff);
-  };
+  std::vector<Due> due;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& part : parts_) {
-      if (!part->placed || !part->map) continue;
-      const Eigen::Isometry3d& t = part->placement.transform;
-      for (const pcl::PointXYZRGB& q : part->map->points) {
-        const Eigen::Vector3d p = t * Eigen::Vector3d(q.x, q.y, q.z);
-        Cell& c = cells[key(p)];
-        c.sum += p;
-        c.colour += Eigen::Vector3d(q.r, q.g, q.b);
-        ++c.count;
+    for (auto& part : parts_) {
+      if (!part->placed) continue;
+      const CameraIntrinsics camera = mapPieceCamera(part->stream.camera());
+      for (KeyframeStore::Entry& piece : part->stream.mapPieces()) {
+        // Anchored to a keyframe whose correction is known (-1: tracked from the first
+        // keyframe, which its robot's graph holds still: the first's correction moves it).
+        const std::int64_t node = std::max<std::int64_t>(piece.anchor, 0);
+        if (node >= static_cast<std::int64_t>(part->merged_keyframes) ||
+            !part->fused.insert(piece.index).second)
+          continue;
+        piece.anchor = part->slots[static_cast<std::size_t>(node)];
+        due.push_back({camera, std::move(piece)});
       }
     }
   }
+  KeyframeStore decoder(0);
+  Frame frame;
+  for (const Due& d : due) {
+    auto same = [&](const CameraMap& m) {
+      const CameraIntrinsics& c = m.camera;
+      return c.width == d.camera.width && c.height == d.camera.height && c.fx == d.camera.fx &&
+             c.fy == d.camera.fy && c.cx == d.camera.cx && c.cy == d.camera.cy &&
+             c.distortion() == d.camera.distortion();
+    };
+    auto it = std::find_if(maps_.begin(), maps_.end(), same);
+    if (it == maps_.end()) {
+      maps_.push_back(
+          {d.camera, std::make_unique<Mapper>(d.camera, settings_.filter, settings_.map,
+                                              settings_.refusion, stats_, &corrections_)});
+      it = std::prev(maps_.end());
+    }
+    decoder.decode(d.piece, frame);
+    it->mapper->fuse(frame);
+  }
   MapCloud cloud;
-  cloud.reserve(cells.size());
-  for (const auto& [k, c] : cells) {
-    pcl::PointXYZRGB p;
-    const Eigen::Vector3d mean = c.sum / c.count;
-    const Eigen::Vector3d colour = c.colour / c.count;
-    p.x = static_cast<float>(mean.x());
-    p.y = static_cast<float>(mean.y());
-    p.z = static_cast<float>(mean.z());
-    p.r = static_cast<std::uint8_t>(colour.x() + 0.5);
-    p.g = static_cast<std::uint8_t>(colour.y() + 0.5);
-    p.b = static_cast<std::uint8_t>(colour.z() + 0.5);
-    cloud.push_back(p);
+  for (CameraMap& m : maps_) {
+    m.mapper->settle();
+    cloud += *m.mapper->snapshot();
   }
   return cloud;
 }

@@ -253,6 +253,7 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
       }
       Placement& p = placements[i];
       p.placed = true;
+      p.first_keyframe = offset;
       p.links = static_cast<int>(links->size());
       p.linked_to =
           std::max_element(by_owner.begin(), by_owner.end(), [](const auto& a, const auto& b) {

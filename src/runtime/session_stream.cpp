@@ -13,6 +13,7 @@ namespace {
 
 constexpr char kGraphKind[5] = "SGRF";
 constexpr char kPlaceKind[5] = "SPLC";
+constexpr char kPieceKind[5] = "SPCE";
 constexpr std::uint32_t kVersion = 1;
 constexpr std::size_t kPoseBytes = 12 * 8;
 constexpr std::size_t kEdgeBytes = 9 + kPoseBytes + 36 * 8;
@@ -48,15 +49,32 @@ std::shared_ptr<const PlaceRecognition::Place> getPlace(BinaryReader& in) {
   return place;
 }
 
+void putImage(RecordWriter& out, const std::vector<std::uint8_t>& png) {
+  out.put<std::uint64_t>(png.size());
+  out.putBytes(png.data(), png.size());
+}
+
+std::shared_ptr<const std::vector<std::uint8_t>> getImage(BinaryReader& in) {
+  std::vector<std::uint8_t> png(in.count(1));
+  in.getBytes(png.data(), png.size());
+  return std::make_shared<const std::vector<std::uint8_t>>(std::move(png));
+}
+
 }  // namespace
 
 SessionStream::SessionStream(std::uint64_t run, const CameraIntrinsics& camera, Options options)
-    : run_(run), camera_(camera), options_(options) {}
+    : run_(run),
+      camera_(camera),
+      options_(options),
+      pieces_(static_cast<std::size_t>(std::max(0.0, options.piece_memory))) {}
 
 void SessionStream::restart() {
   keyframes_sent_ = edges_sent_ = next_place_ = 0;
+  next_piece_ = 0;
   ++totals_.restarts;
 }
+
+void SessionStream::addPiece(const Frame& piece) { pieces_.add(pieces_.encode(piece, piece.pose)); }
 
 std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, double now) {
   std::vector<Record> records;
@@ -102,22 +120,49 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
   // The newest keyframe's place may still be let go (when an older one is near); the ones
   // before it are settled.
   const std::size_t settled = keyframes > 0 ? keyframes - 1 : 0;
-  if (next_place_ >= settled || budget_ <= 0.0) return records;
-  const auto places = graph.places();
+  if (budget_ <= 0.0) return records;
+  std::vector<std::shared_ptr<const PlaceRecognition::Place>> places;
+  if (next_place_ < settled) places = graph.places();
   const std::size_t end = std::min(settled, places.size());
-  for (; next_place_ < end && budget_ > 0.0; ++next_place_) {
-    const auto& place = places[next_place_];
-    if (!place) continue;
+  std::size_t piece = 0;  // the next piece to send, in pieces_
+  while (piece < pieces_.size() && pieces_[piece].index < next_piece_) ++piece;
+  while (budget_ > 0.0) {
+    while (next_place_ < end && !places[next_place_]) ++next_place_;
+    const bool place_due = next_place_ < end;
+    // A piece goes once its anchor has (the merger moves it with that keyframe).
+    const bool piece_due = piece < pieces_.size() &&
+                           pieces_[piece].anchor < static_cast<std::int64_t>(keyframes_sent_);
+    if (!place_due && !piece_due) break;
     std::string record;
-    RecordWriter out(record, kPlaceKind, kVersion);
-    out.put<std::uint64_t>(run_);
-    out.put<std::uint64_t>(next_place_);
-    putPlace(out, *place);
-    out.finish();
-    budget_ -= static_cast<double>(record.size());
-    totals_.bytes += record.size();
-    ++totals_.places;
-    records.push_back({Record::Kind::kPlace, std::move(record)});
+    if (place_due &&
+        (!piece_due || static_cast<std::int64_t>(next_place_) <= pieces_[piece].anchor)) {
+      RecordWriter out(record, kPlaceKind, kVersion);
+      out.put<std::uint64_t>(run_);
+      out.put<std::uint64_t>(next_place_);
+      putPlace(out, *places[next_place_]);
+      out.finish();
+      ++next_place_;
+      ++totals_.places;
+      records.push_back({Record::Kind::kPlace, std::move(record)});
+    } else {
+      const KeyframeStore::Entry& e = pieces_[piece];
+      RecordWriter out(record, kPieceKind, kVersion);
+      out.put<std::uint64_t>(run_);
+      out.put<std::uint64_t>(e.index);
+      out.put(e.timestamp);
+      out.put<std::int64_t>(e.anchor);
+      putPose(out, e.pose);
+      putImage(out, *e.depth_png);
+      putImage(out, *e.colour_png);
+      out.finish();
+      next_piece_ = e.index + 1;
+      ++piece;
+      ++totals_.pieces;
+      totals_.piece_bytes += record.size();
+      records.push_back({Record::Kind::kPiece, std::move(record)});
+    }
+    budget_ -= static_cast<double>(records.back().bytes.size());
+    totals_.bytes += records.back().bytes.size();
   }
   return records;
 }
@@ -125,7 +170,8 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
 std::optional<std::uint64_t> runOfRecord(const std::string& record) {
   const std::string kind = recordKind(record);
   constexpr std::size_t kHeaderBytes = 32;
-  if ((kind != kGraphKind && kind != kPlaceKind) || record.size() < kHeaderBytes + 8)
+  if ((kind != kGraphKind && kind != kPlaceKind && kind != kPieceKind) ||
+      record.size() < kHeaderBytes + 8)
     return std::nullopt;
   std::uint64_t run = 0;
   std::memcpy(&run, record.data() + kHeaderBytes, sizeof run);
@@ -137,18 +183,26 @@ void SessionAssembler::reset(std::uint64_t run) {
   started_ = true;
   session_ = Session{};
   places_.clear();
+  pieces_.clear();
 }
 
 SessionAssembler::Result SessionAssembler::apply(const std::string& record,
                                                  const std::string& source) {
   const std::string kind = recordKind(record);
-  const bool graph = kind == kGraphKind;
-  if (!graph && kind != kPlaceKind)
+  if (kind != kGraphKind && kind != kPlaceKind && kind != kPieceKind)
     throw InputError(source + ": not a session record (" +
                      (kind.empty() ? std::string("no RGBDMAP header") : "kind '" + kind + "'") +
                      ")");
-  BinaryReader in = readRecord(record, source, graph ? kGraphKind : kPlaceKind, kVersion);
-  return graph ? applyGraph(in) : applyPlace(in);
+  if (kind == kGraphKind) {
+    BinaryReader in = readRecord(record, source, kGraphKind, kVersion);
+    return applyGraph(in);
+  }
+  if (kind == kPlaceKind) {
+    BinaryReader in = readRecord(record, source, kPlaceKind, kVersion);
+    return applyPlace(in);
+  }
+  BinaryReader in = readRecord(record, source, kPieceKind, kVersion);
+  return applyPiece(in);
 }
 
 SessionAssembler::Result SessionAssembler::applyGraph(BinaryReader& in) {
@@ -202,6 +256,37 @@ SessionAssembler::Result SessionAssembler::applyPlace(BinaryReader& in) {
   }
   places_[id] = std::move(place);
   return result;
+}
+
+SessionAssembler::Result SessionAssembler::applyPiece(BinaryReader& in) {
+  const std::uint64_t run = in.get<std::uint64_t>();
+  KeyframeStore::Entry e;
+  e.index = in.get<std::uint64_t>();
+  e.timestamp = in.get<double>();
+  e.anchor = in.get<std::int64_t>();
+  e.pose = getPose(in);
+  e.fused_at = e.pose;
+  e.depth_png = getImage(in);
+  e.colour_png = getImage(in);
+  if (!in.atEnd()) in.fail("corrupt (bytes after the piece's images)");
+  if (e.anchor < -1 || e.depth_png->empty() || e.colour_png->empty())
+    in.fail("corrupt (a map piece with anchor " + std::to_string(e.anchor) + " and images of " +
+            std::to_string(e.depth_png->size()) + " and " + std::to_string(e.colour_png->size()) +
+            " bytes)");
+  Result result = Result::kApplied;
+  if (!started_ || run != run_) {
+    reset(run);
+    result = Result::kNewRun;
+  }
+  pieces_[e.index] = std::move(e);
+  return result;
+}
+
+std::vector<KeyframeStore::Entry> SessionAssembler::mapPieces() const {
+  std::vector<KeyframeStore::Entry> pieces;
+  pieces.reserve(pieces_.size());
+  for (const auto& [index, piece] : pieces_) pieces.push_back(piece);
+  return pieces;
 }
 
 Session SessionAssembler::session() const {

@@ -64,9 +64,10 @@ void TrackingThread::track(Frame& frame) {
     bool keyframe = false;
     if (parts_.tracker.track(frame)) {
       keyframe = parts_.fusion.submit(frame, wait_for_fusion_);
-      if (keyframe)
+      if (keyframe) {
+        parts_.publication.afterKeyframe(frame);
         parts_.tracker.acceptKeyframe(frame);
-      else
+      } else
         stats_.keyframes_deferred.fetch_add(1, std::memory_order_relaxed);
     }
     if (parts_.before_placement && frame.has_pose) parts_.before_placement->add(frame.anchor);

@@ -50,6 +50,10 @@ class KeyframeStore {
   // Keeps the frame's images (`fused_at`: the corrected pose it was fused at), then lets kept
   // keyframes go while over budget. Returns the indices let go, each as it was when let go.
   std::vector<std::size_t> add(const Frame& frame, const Eigen::Isometry3d& fused_at);
+  // The same for an entry encoded already (encode(), here or by another store).
+  std::vector<std::size_t> add(Entry entry);
+  // The frame's images as the store keeps them (not kept: see add()).
+  Entry encode(const Frame& frame, const Eigen::Isometry3d& fused_at);
   // Takes in `earlier` (a saved session's kept keyframes, with their poses in this store's frame)
   // before the keyframes kept so far, then lets kept keyframes go while over budget.
   void adopt(std::vector<Entry> earlier);

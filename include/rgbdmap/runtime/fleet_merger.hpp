@@ -5,13 +5,17 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/session_merge.hpp"
 #include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {
 
@@ -19,8 +23,10 @@ namespace rgbdmap {
 // (SessionAssembler), and merge() places the robots in the first one's frame by the places they
 // share (SessionMerger: PlaceMatcher, agreement, one pose graph). A robot that restarts streams a
 // new run: the run before stays as a part of its own (its map is not lost), and the new one is
-// placed again. The maps are the robots' own clouds, moved by their placements and averaged in
-// voxels where they overlap. Safe to call from several threads.
+// placed again. The map is fused from the placed runs' map pieces (map_piece.hpp) into one TSDF
+// at the merged graph's poses, and follows that graph as a robot's map follows its own (Mapper:
+// pieces a merge moves are fused again): where two robots saw one wall, one surface. Safe to
+// call from several threads.
 class FleetMerger {
  public:
   struct Robot {
@@ -29,26 +35,28 @@ class FleetMerger {
     Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  // its map frame, merged
     std::string linked_to;  // the robot most of its agreeing places belong to
     int links = 0;
-    std::size_t keyframes = 0, places = 0, runs = 0;
+    std::size_t keyframes = 0, places = 0, pieces = 0, runs = 0;
   };
 
+  // `settings`: the configuration of the merge (loop.*) and of the merged map (filter.*, map.*,
+  // loop.refusion_*).
   FleetMerger(std::vector<std::string> robots, const Config& settings);
 
   // One record of robot `index`'s stream (`source`: the topic). kGap: records are missing, ask
   // the robot to send again. Throws InputError naming `source` for a record that is not one.
   SessionAssembler::Result receive(std::size_t index, const std::string& record,
                                    const std::string& source);
-  // Robot `index`'s newest map (in its own map frame), made at `stamp` (the time of its newest
-  // frame: it belongs to the run that was mapping then).
-  void receiveMap(std::size_t index, std::shared_ptr<const MapCloud> map, double stamp);
   // Places the robots with what has arrived, when anything has since the last call (false:
   // nothing new). Runs SessionMerger without holding the lock.
   bool merge();
   std::vector<Robot> robots() const;
-  // The merged graph and places of every placed run (no kept keyframes: robots send no images).
+  // The merged graph and places of every placed run (no kept keyframes: the pieces are at half
+  // resolution, not what a run continued from the session would fuse).
   Session session() const;
-  // The placed robots' maps in the merged frame, averaged in `voxel` cubes.
-  MapCloud map(double voxel) const;
+  // The merged map: the placed runs' pieces that have not been fused yet are, and the map is
+  // brought to the latest merge's poses. Robots with another camera than the first placed one's
+  // are fused into TSDFs of their own (their clouds are written together).
+  MapCloud map();
 
  private:
   struct Part {  // one run of one robot
@@ -57,7 +65,13 @@ class FleetMerger {
     SessionAssembler stream;
     bool placed = false;
     SessionMerger::Placement placement;
-    std::shared_ptr<const MapCloud> map;  // its newest
+    std::vector<std::int64_t> slots;   // each graph keyframe's id in corrections_
+    std::size_t merged_keyframes = 0;  // those the latest merge placed (their corrections known)
+    std::set<std::uint64_t> fused;     // the frame indices of its pieces fused so far
+  };
+  struct CameraMap {  // the TSDF of the pieces of one camera
+    CameraIntrinsics camera;
+    std::unique_ptr<Mapper> mapper;
   };
 
   Config settings_;
@@ -67,6 +81,12 @@ class FleetMerger {
   std::vector<std::unique_ptr<Part>> parts_;  // in arrival order; the first robot's first first
   bool changed_ = false;
   Session merged_;
+  std::int64_t slots_ = 0;       // keyframes received, over all parts
+  PoseCorrections corrections_;  // by slot: the merged graph's correction of each keyframe
+
+  std::mutex mapping_;  // one map() at a time: the mappers are not shared
+  RunStats stats_;
+  std::vector<CameraMap> maps_;
 };
 
 }  // namespace rgbdmap

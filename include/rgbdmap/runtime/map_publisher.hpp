@@ -43,6 +43,10 @@ class MapPublisher {
   // it reads it on its own thread through LoopCloser::readGraph()), and null before it goes; a
   // subscriber must stop reading it before returning from the null call.
   virtual void attachGraph(const LoopCloser* /*graph*/, const CameraIntrinsics& /*camera*/) {}
+  // Each keyframe given to the map, with its pose as tracked (odometry) and its anchor, before
+  // loop closure corrects it (for a subscriber that sends the map as keyframes); valid only
+  // during the call.
+  virtual void publishKeyframe(const Frame& /*keyframe*/) {}
 };
 
 // Attaches the loop closer to a publisher for as long as it lives (declared after it, so that
@@ -79,6 +83,10 @@ class MapPublication {
 
   // Tracking thread: every frame, after its pose and keyframe decision.
   void afterFrame(const Frame& frame, TrackingState state, const RunStats& stats, bool keyframe);
+  // A keyframe the map took, its pose as tracked.
+  void afterKeyframe(const Frame& keyframe) {
+    if (publisher_) publisher_->publishKeyframe(keyframe);
+  }
   // Tracking thread: whether to ask the fusion thread for a map now (at most once per new
   // keyframe, when the subscriber is ready and the spacing allows).
   bool mapDue(const RunStats& stats);

@@ -32,8 +32,9 @@ class SessionMerger {
   struct Placement {
     bool placed = false;
     Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  // its frame in the first's
-    int links = 0;       // agreeing places it was placed by
-    int linked_to = -1;  // the session (index) most of them belong to
+    int links = 0;                   // agreeing places it was placed by
+    int linked_to = -1;              // the session (index) most of them belong to
+    std::size_t first_keyframe = 0;  // its keyframes' place in the merged graph
   };
 
   // `settings`: the first session's effective configuration (tracking, loop and filter keys).

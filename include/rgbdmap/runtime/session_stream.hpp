@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rgbdmap/base/binary_record.hpp"
+#include "rgbdmap/mapping/keyframe_store.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
 
@@ -18,21 +19,27 @@ namespace rgbdmap {
 //  - a graph record: the run's id, the camera, the keyframes added since the last graph record
 //    (timestamp, odometry, pose as optimised when sent) and the edges added since;
 //  - a place record: one keyframe's place (ORB features with 3-D points, and the dense reference
-//    packed as loop closure keeps it: 8 bytes a point).
-// No images: the map itself goes another way. Graph records always go (a few hundred bytes a
-// keyframe); places, tens to hundreds of KB each, wait for the byte budget, oldest first.
+//    packed as loop closure keeps it: 8 bytes a point);
+//  - a piece record: one keyframe of the map at half resolution (map_piece.hpp) with its
+//    odometry pose and anchor, to be fused by the merger at the poses of its graph.
+// Graph records always go (a few hundred bytes a keyframe); places and pieces, tens of KB each,
+// wait for the byte budget, the oldest keyframe's first. Pieces waiting are kept within
+// `piece_memory` (beyond it the most redundant view is let go, as KeyframeStore does), and so
+// are those sent, to send again to a merger that asks.
 class SessionStream {
  public:
   struct Options {
     double bytes_per_second = 500e3;  // the average the records stay under
     double burst_seconds = 2.0;       // budget saved while idle, at most
+    double piece_memory = 32e6;       // bytes of pieces kept (to send, and to send again)
   };
   struct Record {
-    enum class Kind { kGraph, kPlace } kind;
+    enum class Kind { kGraph, kPlace, kPiece } kind;
     std::string bytes;
   };
   struct Totals {
-    std::uint64_t keyframes = 0, edges = 0, places = 0, bytes = 0, restarts = 0;
+    std::uint64_t keyframes = 0, edges = 0, places = 0, pieces = 0, bytes = 0, restarts = 0;
+    std::uint64_t piece_bytes = 0;
   };
 
   // `run`: this run's id (a robot that restarts is a new run: its old part is not duplicated).
@@ -42,6 +49,9 @@ class SessionStream {
   // then places while the budget allows. Reads the graph under its lock once (loop closure
   // waits at most that long).
   std::vector<Record> take(const LoopCloser& graph, double now);
+  // A keyframe of the map at the pieces' resolution (makeMapPiece), its pose the odometry's:
+  // sent once the graph record with its anchor went.
+  void addPiece(const Frame& piece);
   // Everything again from the first keyframe (a merger that started late, or lost records).
   void restart();
   const Totals& totals() const { return totals_; }
@@ -52,7 +62,9 @@ class SessionStream {
   CameraIntrinsics camera_;
   Options options_;
   std::size_t keyframes_sent_ = 0, edges_sent_ = 0, next_place_ = 0;
-  double budget_ = 0.0;  // bytes; may go below zero by one place
+  KeyframeStore pieces_;
+  std::uint64_t next_piece_ = 0;  // frame index: pieces from it on are still to send
+  double budget_ = 0.0;           // bytes; may go below zero by one place
   double budget_at_ = -1.0;
   Totals totals_;
 };
@@ -77,6 +89,11 @@ class SessionAssembler {
   std::size_t keyframes() const { return session_.graph.keyframes.size(); }
   std::size_t edges() const { return session_.graph.edges.size(); }
   std::size_t places() const { return places_.size(); }
+  std::size_t pieces() const { return pieces_.size(); }
+  const CameraIntrinsics& camera() const { return session_.camera; }
+  // The pieces so far, oldest first: images as sent, `pose` the odometry's, `anchor` the
+  // keyframe (of this run's graph) whose correction moves it.
+  std::vector<KeyframeStore::Entry> mapPieces() const;
   // The session so far: camera, keyframes, edges and places (no kept keyframes: no images).
   Session session() const;
 
@@ -84,11 +101,13 @@ class SessionAssembler {
   void reset(std::uint64_t run);
   Result applyGraph(BinaryReader& in);
   Result applyPlace(BinaryReader& in);
+  Result applyPiece(BinaryReader& in);
 
   std::uint64_t run_ = 0;
   bool started_ = false;
   Session session_;
   std::map<std::size_t, std::shared_ptr<const PlaceRecognition::Place>> places_;
+  std::map<std::uint64_t, KeyframeStore::Entry> pieces_;  // by frame index
 };
 
 }  // namespace rgbdmap

@@ -43,6 +43,7 @@ class RosPublisher : public MapPublisher {
   void publishMap(std::shared_ptr<const MapCloud> map) override;
   void publishUp(const UpEvidence& evidence) override;
   void attachGraph(const LoopCloser* graph, const CameraIntrinsics& camera) override;
+  void publishKeyframe(const Frame& keyframe) override;
   // The session stream (null when not streamed).
   SessionPublisher* session() { return session_.get(); }
 

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -13,10 +14,11 @@
 
 namespace rgbdmap {
 
-// The session as it grows, for a fleet's merger: ~session/graph and ~session/places
-// (std_msgs/UInt8MultiArray, each message one SessionStream record), every `interval` seconds
-// from a thread of its own, within the stream's byte budget. Mapping never waits for it (it reads
-// the graph under the loop closer's lock, as a checkpoint does).
+// The session as it grows, for a fleet's merger: ~session/graph, ~session/places and
+// ~session/pieces (std_msgs/UInt8MultiArray, each message one SessionStream record), every
+// `interval` seconds from a thread of its own, within the stream's byte budget. Mapping never
+// waits for it: it reads the graph under the loop closer's lock, as a checkpoint does, and a
+// keyframe is taken at half resolution into a short queue (the oldest dropped when full).
 class SessionPublisher {
  public:
   struct Options {
@@ -30,6 +32,8 @@ class SessionPublisher {
   void attach(const LoopCloser* graph, const CameraIntrinsics& camera);
   // Everything again from the first keyframe (~session/resend: a merger that came late).
   void resend() { resend_.store(true); }
+  // A keyframe the map took (tracking thread): queued as a map piece while a graph is attached.
+  void addKeyframe(const Frame& keyframe);
   // What went out so far (after the last attach(nullptr): final).
   SessionStream::Totals totals() const;
   std::uint64_t run() const { return run_; }
@@ -40,7 +44,13 @@ class SessionPublisher {
 
   Options options_;
   std::uint64_t run_;
-  ros::Publisher graph_pub_, places_pub_;
+  ros::Publisher graph_pub_, places_pub_, pieces_pub_;
+  // Pieces made on the tracking thread, for the stream (their own lock: the tracking thread
+  // never waits for a send).
+  std::mutex incoming_mutex_;
+  std::deque<Frame> incoming_;
+  std::uint64_t pieces_dropped_ = 0;
+  std::atomic<bool> attached_{false};
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   const LoopCloser* graph_ = nullptr;
