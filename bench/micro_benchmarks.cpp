@@ -25,6 +25,7 @@
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 #include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/runtime/map_piece.hpp"
 
 namespace {
 
@@ -156,6 +157,18 @@ void BM_DepthFilter(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DepthFilter)->Unit(benchmark::kMillisecond);
+
+// A keyframe made into a map piece for a fleet's merger (4 x 4 blocks averaged, colour
+// resized): what the tracking thread spends on each keyframe when a node streams its session.
+void BM_MakeMapPiece(benchmark::State& state) {
+  Fixture& f = fixture();
+  rgbdmap::Frame piece;
+  for (auto _ : state) {
+    rgbdmap::makeMapPiece(f.frame, piece);
+    benchmark::DoNotOptimize(piece.depth.data);
+  }
+}
+BENCHMARK(BM_MakeMapPiece)->Unit(benchmark::kMillisecond);
 
 // Edge-aware inverse-depth smoothing of the filtered image (copy included, as above).
 void BM_DepthSmoother(benchmark::State& state) {

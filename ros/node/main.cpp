@@ -68,7 +68,9 @@ std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c
          ", \"maps_published\": " + std::to_string(maps) +
          ", \"session_bytes\": " + std::to_string(session.bytes) +
          ", \"session_keyframes\": " + std::to_string(session.keyframes) +
-         ", \"session_places\": " + std::to_string(session.places) + "}\n}\n";
+         ", \"session_places\": " + std::to_string(session.places) +
+         ", \"session_pieces\": " + std::to_string(session.pieces) +
+         ", \"session_piece_bytes\": " + std::to_string(session.piece_bytes) + "}\n}\n";
   return out;
 }
 

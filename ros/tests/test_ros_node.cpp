@@ -10,6 +10,7 @@
 #include <std_msgs/UInt8MultiArray.h>
 #include <std_srvs/Trigger.h>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <filesystem>
@@ -215,6 +216,8 @@ TEST_F(RosNode, StreamsItsSessionWithinItsByteBudget) {
       nh_->subscribe<std_msgs::UInt8MultiArray>("/rgbdmap/session/graph", 1000, receive("graph"));
   ros::Subscriber places =
       nh_->subscribe<std_msgs::UInt8MultiArray>("/rgbdmap/session/places", 1000, receive("places"));
+  ros::Subscriber pieces =
+      nh_->subscribe<std_msgs::UInt8MultiArray>("/rgbdmap/session/pieces", 1000, receive("pieces"));
   const auto started = std::chrono::steady_clock::now();
   const std::string node_log = dir_ + "/node.log";
   std::vector<std::string> args = nodeArgs(dir_, "");
@@ -242,7 +245,7 @@ TEST_F(RosNode, StreamsItsSessionWithinItsByteBudget) {
             EXPECT_EQ(resend.response.message, "run " + std::to_string(merger.run()));
           }
         }
-        return merger.keyframes() >= keyframes && merger.places() >= settled;
+        return merger.keyframes() >= keyframes && merger.places() >= settled && merger.pieces() > 0;
       },
       120))
       << merger.keyframes() << " of " << keyframes << " keyframes, " << merger.places() << " of "
@@ -261,6 +264,14 @@ TEST_F(RosNode, StreamsItsSessionWithinItsByteBudget) {
   for (std::size_t id = 0; id + 1 < keyframes; ++id)
     EXPECT_EQ(static_cast<bool>(got.graph.places[id]), static_cast<bool>(saved.graph.places[id]))
         << "keyframe " << id;
+  // The map's pieces are keyframes the map took, as tracked (the session keeps them all here).
+  for (const KeyframeStore::Entry& piece : merger.mapPieces()) {
+    const auto kept = std::find_if(saved.keyframes.begin(), saved.keyframes.end(),
+                                   [&](const auto& k) { return k.index == piece.index; });
+    ASSERT_NE(kept, saved.keyframes.end()) << "frame " << piece.index;
+    EXPECT_EQ(piece.anchor, kept->anchor);
+    EXPECT_TRUE(piece.pose.isApprox(kept->pose, 1e-12));
+  }
   // Within the budget: what it earned since the node started, the 2 s it may save and the one
   // place that may overdraw it.
   EXPECT_LE(static_cast<double>(bytes), rate * (seconds + 2.0) + static_cast<double>(largest))

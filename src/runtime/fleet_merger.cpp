@@ -11,8 +11,11 @@ namespace rgbdmap {
 
 FleetMerger::FleetMerger(std::vector<std::string> robots, const Config& settings)
     : settings_(settings) {
+  // The filter's windows are in pixels, a piece's pixel is 4 of the camera's: neighbours are 4
+  // times further apart (a slanted surface jumps 4 times more between them), and a block's
+  // average has smoothed already. (Unscaled: recall 0.93 instead of 0.99 on a synthetic lap.)
   settings_.filter.edge_jump *= kMapPieceStep;
-  settings_.filter.smooth_radius = (settings_.filter.smooth_radius + 1) / kMapPieceStep;
+  settings_.filter.smooth_radius = settings_.filter.smooth_radius / kMapPieceStep;
   for (std::string& name : robots) {
     Robot robot;
     robot.name = std::move(name);
@@ -94,7 +97,7 @@ bool FleetMerger::merge() {
       newest = order[i];
       keyframes += order[i]->stream.keyframes();
       places += order[i]->stream.places();
-      pieces += order[i]->stream.pieces();
+      pieces += order[i]->stream.pieces() + order[i]->fused.size();
     }
     r.keyframes = keyframes;
     r.places = places;
@@ -125,6 +128,7 @@ Session FleetMerger::session() const {
 MapCloud FleetMerger::map() {
   const std::lock_guard<std::mutex> one_at_a_time(mapping_);
   struct Due {
+    const std::string* robot;
     CameraIntrinsics camera;
     KeyframeStore::Entry piece;
   };
@@ -138,11 +142,12 @@ MapCloud FleetMerger::map() {
         // Anchored to a keyframe whose correction is known (-1: tracked from the first
         // keyframe, which its robot's graph holds still: the first's correction moves it).
         const std::int64_t node = std::max<std::int64_t>(piece.anchor, 0);
-        if (node >= static_cast<std::int64_t>(part->merged_keyframes) ||
-            !part->fused.insert(piece.index).second)
-          continue;
+        if (node >= static_cast<std::int64_t>(part->merged_keyframes)) continue;
+        // The mapper keeps it from now on (a piece sent again is not fused twice).
+        part->stream.forgetMapPiece(piece.index);
+        if (!part->fused.insert(piece.index).second) continue;
         piece.anchor = part->slots[static_cast<std::size_t>(node)];
-        due.push_back({camera, std::move(piece)});
+        due.push_back({&robots_[part->robot].name, camera, std::move(piece)});
       }
     }
   }
@@ -162,7 +167,13 @@ MapCloud FleetMerger::map() {
                                               settings_.refusion, stats_, &corrections_)});
       it = std::prev(maps_.end());
     }
-    decoder.decode(d.piece, frame);
+    try {
+      decoder.decode(d.piece, frame);
+    } catch (const std::exception& e) {
+      spdlog::warn("merger: {}'s map piece of frame {} left out: {}", *d.robot, d.piece.index,
+                   e.what());
+      continue;
+    }
     it->mapper->fuse(frame);
   }
   MapCloud cloud;

@@ -264,7 +264,48 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
       progress = true;
     }
   }
+  optimiseTogether(merged);
+  // Where the graph of all put each placed session (its keyframes, fitted rigidly); the first's
+  // frame is the merged one.
+  for (std::size_t i = 1; i < sessions.size(); ++i) {
+    const std::size_t count = sessions[i].graph.keyframes.size();
+    if (!placements[i].placed || count < 3) continue;
+    Eigen::Matrix3Xd before(3, count), after(3, count);
+    for (std::size_t k = 0; k < count; ++k) {
+      before.col(static_cast<Eigen::Index>(k)) = sessions[i].graph.keyframes[k].pose.translation();
+      after.col(static_cast<Eigen::Index>(k)) =
+          merged.graph.keyframes[placements[i].first_keyframe + k].pose.translation();
+    }
+    placements[i].transform.matrix() = Eigen::umeyama(before, after, false);
+  }
   return merged;
+}
+
+void SessionMerger::optimiseTogether(Session& merged) const {
+  // Each part of the graph that no edge ties to the first keyframe (a run's part after tracking
+  // was lost, before it was found again) is held by its first keyframe: nothing says where else
+  // it would be.
+  const std::size_t n = merged.graph.keyframes.size();
+  if (n < 2) return;
+  std::vector<std::size_t> root(n);
+  for (std::size_t i = 0; i < n; ++i) root[i] = i;
+  const auto find = [&root](std::size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  PoseGraph graph;
+  for (const auto& k : merged.graph.keyframes) graph.addNode(k.pose);
+  for (const PoseGraph::Edge& e : merged.graph.edges) {
+    graph.addEdge(e);
+    const std::size_t a = find(static_cast<std::size_t>(e.from)),
+                      b = find(static_cast<std::size_t>(e.to));
+    root[std::max(a, b)] = std::min(a, b);  // a part's root is its first keyframe
+  }
+  for (std::size_t i = 1; i < n; ++i)
+    if (find(i) == i) graph.hold(static_cast<int>(i), true);
+  graph.optimise(100, 1);
+  for (std::size_t i = 0; i < n; ++i)
+    merged.graph.keyframes[i].pose = graph.pose(static_cast<int>(i));
 }
 
 }  // namespace rgbdmap

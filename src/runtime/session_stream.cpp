@@ -74,7 +74,11 @@ void SessionStream::restart() {
   ++totals_.restarts;
 }
 
-void SessionStream::addPiece(const Frame& piece) { pieces_.add(pieces_.encode(piece, piece.pose)); }
+void SessionStream::addPiece(const Frame& piece) {
+  if (last_piece_ && viewpointDistance(*last_piece_, piece.pose) < options_.piece_spacing) return;
+  last_piece_ = piece.pose;
+  pieces_.add(pieces_.encode(piece, piece.pose));
+}
 
 std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, double now) {
   std::vector<Record> records;
@@ -134,8 +138,8 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
                            pieces_[piece].anchor < static_cast<std::int64_t>(keyframes_sent_);
     if (!place_due && !piece_due) break;
     std::string record;
-    if (place_due &&
-        (!piece_due || static_cast<std::int64_t>(next_place_) <= pieces_[piece].anchor)) {
+    // Places first: they place the robot (and its pieces are of no use until it is).
+    if (place_due) {
       RecordWriter out(record, kPlaceKind, kVersion);
       out.put<std::uint64_t>(run_);
       out.put<std::uint64_t>(next_place_);

@@ -35,7 +35,7 @@ class FleetMerger {
     Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  // its map frame, merged
     std::string linked_to;  // the robot most of its agreeing places belong to
     int links = 0;
-    std::size_t keyframes = 0, places = 0, pieces = 0, runs = 0;
+    std::size_t keyframes = 0, places = 0, pieces = 0, runs = 0;  // pieces: received
   };
 
   // `settings`: the configuration of the merge (loop.*) and of the merged map (filter.*, map.*,

@@ -17,7 +17,10 @@ namespace rgbdmap {
 // new one's free, its odometry and loop edges kept, and a loop edge for each agreeing place.
 // A session without kept keyframes (a robot's stream) is looked for by its places instead.
 // Sessions are tried again until none more can be placed, so a session linked only through
-// another one joins too. A session that shares no place with the others is left out.
+// another one joins too. A session that shares no place with the others is left out. Last, one
+// graph of all the placed sessions is optimised, only the first keyframe held: a robot's stream
+// holds poses as they were when sent and the loop edges that came later, and the links' errors
+// are spread over every session, not left to the last one placed.
 class SessionMerger {
  public:
   // Two placements agree on a session's frame within these (its own map's residual errors
@@ -56,6 +59,9 @@ class SessionMerger {
   std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
   void append(Session& merged, std::vector<int>& owner, int index, const Session& session,
               const std::vector<Match>& links) const;
+  // One pose graph over every placed session's keyframes, the first keyframe held: their own
+  // edges and the links between them.
+  void optimiseTogether(Session& merged) const;
 
   Config settings_;
   Options options_;

@@ -22,16 +22,19 @@ namespace rgbdmap {
 //    packed as loop closure keeps it: 8 bytes a point);
 //  - a piece record: one keyframe of the map at half resolution (map_piece.hpp) with its
 //    odometry pose and anchor, to be fused by the merger at the poses of its graph.
-// Graph records always go (a few hundred bytes a keyframe); places and pieces, tens of KB each,
-// wait for the byte budget, the oldest keyframe's first. Pieces waiting are kept within
-// `piece_memory` (beyond it the most redundant view is let go, as KeyframeStore does), and so
-// are those sent, to send again to a merger that asks.
+// Graph records always go (a few hundred bytes a keyframe); places (about 150 KB each: the
+// reference is most of it) and then pieces (about 16 KB) wait for the byte budget, oldest first.
+// Pieces waiting are kept within `piece_memory` (beyond it the most redundant view is let go, as
+// KeyframeStore does), and so are those sent, to send again to a merger that asks.
 class SessionStream {
  public:
   struct Options {
-    double bytes_per_second = 500e3;  // the average the records stay under
+    double bytes_per_second = 750e3;  // the average the records stay under
     double burst_seconds = 2.0;       // budget saved while idle, at most
     double piece_memory = 32e6;       // bytes of pieces kept (to send, and to send again)
+    // A keyframe becomes a piece this far from the last piece's viewpoint (viewpointDistance:
+    // metres, a turn counting 2 m per radian).
+    double piece_spacing = 0.1;
   };
   struct Record {
     enum class Kind { kGraph, kPlace, kPiece } kind;
@@ -63,8 +66,9 @@ class SessionStream {
   Options options_;
   std::size_t keyframes_sent_ = 0, edges_sent_ = 0, next_place_ = 0;
   KeyframeStore pieces_;
-  std::uint64_t next_piece_ = 0;  // frame index: pieces from it on are still to send
-  double budget_ = 0.0;           // bytes; may go below zero by one place
+  std::optional<Eigen::Isometry3d> last_piece_;  // where the last piece was seen from
+  std::uint64_t next_piece_ = 0;                 // frame index: pieces from it on are still to send
+  double budget_ = 0.0;                          // bytes; may go below zero by one place
   double budget_at_ = -1.0;
   Totals totals_;
 };
@@ -94,6 +98,8 @@ class SessionAssembler {
   // The pieces so far, oldest first: images as sent, `pose` the odometry's, `anchor` the
   // keyframe (of this run's graph) whose correction moves it.
   std::vector<KeyframeStore::Entry> mapPieces() const;
+  // Lets a piece go once it is kept elsewhere (the merger's map).
+  void forgetMapPiece(std::uint64_t index) { pieces_.erase(index); }
   // The session so far: camera, keyframes, edges and places (no kept keyframes: no images).
   Session session() const;
 
