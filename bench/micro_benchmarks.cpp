@@ -159,7 +159,7 @@ void BM_DepthFilter(benchmark::State& state) {
 BENCHMARK(BM_DepthFilter)->Unit(benchmark::kMillisecond);
 
 // A keyframe made into a map piece for a fleet's merger (4 x 4 blocks averaged, colour
-// resized): what the tracking thread spends on each keyframe when a node streams its session.
+// resized): what a streaming node spends on each keyframe (on its publisher thread).
 void BM_MakeMapPiece(benchmark::State& state) {
   Fixture& f = fixture();
   rgbdmap::Frame piece;

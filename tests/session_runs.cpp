@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
-#include "rgbdmap/runtime/map_piece.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/session_stream.hpp"
 #include "test_support.hpp"
@@ -124,11 +123,10 @@ std::vector<std::string> streamOf(const Session& saved, std::uint64_t run) {
   SessionStream stream(run, saved.camera, SessionStream::Options{1e12, 1.0, 1e12});
   // The kept keyframes as the robot's map pieces.
   KeyframeStore decoder(0);
-  Frame keyframe, piece;
+  Frame keyframe;
   for (const KeyframeStore::Entry& kept : saved.keyframes) {
     decoder.decode(kept, keyframe);
-    makeMapPiece(keyframe, piece);
-    stream.addPiece(piece);
+    stream.addKeyframe(keyframe);
   }
   std::vector<std::string> records;
   for (SessionStream::Record& r : stream.take(robot, 0.0)) records.push_back(std::move(r.bytes));

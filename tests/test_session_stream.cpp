@@ -93,13 +93,12 @@ TEST(SessionStream, MapPiecesGoOnceTheirAnchorHasAndArriveWhole) {
   Frame keyframe, piece;
   for (const KeyframeStore::Entry& kept : saved.keyframes) {
     decoder.decode(kept, keyframe);
-    makeMapPiece(keyframe, piece);
-    stream.addPiece(piece);
+    stream.addKeyframe(keyframe);
   }
   // One tracked from a keyframe the graph has not sent: it waits.
-  piece.index = saved.keyframes.back().index + 1;
-  piece.anchor = static_cast<std::int64_t>(saved.graph.keyframes.size());
-  stream.addPiece(piece);
+  keyframe.index = saved.keyframes.back().index + 1;
+  keyframe.anchor = static_cast<std::int64_t>(saved.graph.keyframes.size());
+  stream.addKeyframe(keyframe);
   SessionAssembler merger;
   for (const SessionStream::Record& r : stream.take(robot.closer, 0.0))
     EXPECT_NE(merger.apply(r.bytes, "/robot1/session"), SessionAssembler::Result::kGap);

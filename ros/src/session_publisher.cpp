@@ -3,11 +3,11 @@
 #include <spdlog/spdlog.h>
 #include <std_msgs/UInt8MultiArray.h>
 
+#include <algorithm>
 #include <chrono>
 #include <random>
 
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/map_piece.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -77,25 +77,48 @@ SessionStream::Totals SessionPublisher::totals() const {
 
 void SessionPublisher::addKeyframe(const Frame& keyframe) {
   if (!attached_.load()) return;
-  // Deep enough for the keyframes of a few intervals; a stalled publisher thread costs at most
-  // this many small images.
-  constexpr std::size_t kMaxQueued = 32;
-  std::lock_guard<std::mutex> lock(incoming_mutex_);
-  if (incoming_.size() >= kMaxQueued) {
-    incoming_.pop_front();
-    ++pieces_dropped_;
+  {
+    // A copy (a memcpy of the images, buffers reused): the piece is made on this publisher's
+    // thread, not the tracking thread's (0.7 ms a keyframe). The thread wakes for it, so a few
+    // are enough; a stalled thread costs at most this many images.
+    constexpr std::size_t kMaxQueued = 8;
+    std::lock_guard<std::mutex> lock(incoming_mutex_);
+    if (incoming_.size() >= kMaxQueued) {
+      spare_.push_back(std::move(incoming_.front()));
+      incoming_.pop_front();
+      ++pieces_dropped_;
+    }
+    Frame copy;
+    if (!spare_.empty()) {
+      copy = std::move(spare_.back());
+      spare_.pop_back();
+    }
+    keyframe.depth.copyTo(copy.depth);
+    keyframe.color.copyTo(copy.color);
+    copy.index = keyframe.index;
+    copy.timestamp = keyframe.timestamp;
+    copy.has_pose = keyframe.has_pose;
+    copy.pose = keyframe.pose;
+    copy.anchor = keyframe.anchor;
+    incoming_.push_back(std::move(copy));
   }
-  incoming_.emplace_back();
-  makeMapPiece(keyframe, incoming_.back());
+  wake_.notify_all();
+}
+
+void SessionPublisher::takeKeyframes() {
+  std::deque<Frame> keyframes;
+  {
+    std::lock_guard<std::mutex> lock(incoming_mutex_);
+    keyframes.swap(incoming_);
+  }
+  for (Frame& keyframe : keyframes) stream_->addKeyframe(keyframe);
+  std::lock_guard<std::mutex> lock(incoming_mutex_);
+  for (Frame& keyframe : keyframes)
+    if (spare_.size() < 2) spare_.push_back(std::move(keyframe));
 }
 
 void SessionPublisher::send(double now) {
-  std::deque<Frame> pieces;
-  {
-    std::lock_guard<std::mutex> lock(incoming_mutex_);
-    pieces.swap(incoming_);
-  }
-  for (const Frame& piece : pieces) stream_->addPiece(piece);
+  takeKeyframes();
   if (resend_.exchange(false)) {
     stream_->restart();
     spdlog::info("session stream: sending the session again from its first keyframe");
@@ -119,9 +142,17 @@ void SessionPublisher::send(double now) {
 
 void SessionPublisher::loop() {
   std::unique_lock<std::mutex> lock(mutex_);
+  double next_send = 0.0;
   while (!stop_) {
-    if (graph_) send(steadySeconds());
-    wake_.wait_for(lock, std::chrono::duration<double>(options_.interval));
+    const double now = steadySeconds();
+    if (graph_ && now >= next_send) {
+      send(now);
+      next_send = now + options_.interval;
+    } else if (graph_) {
+      takeKeyframes();  // woken by a keyframe: made a piece now, sent at the next look
+    }
+    wake_.wait_for(lock, std::chrono::duration<double>(
+                             std::max(1e-3, std::min(options_.interval, next_send - now))));
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/runtime/map_piece.hpp"
 #include "rgbdmap/runtime/session_records.hpp"
 
 namespace rgbdmap {
@@ -74,10 +75,12 @@ void SessionStream::restart() {
   ++totals_.restarts;
 }
 
-void SessionStream::addPiece(const Frame& piece) {
-  if (last_piece_ && viewpointDistance(*last_piece_, piece.pose) < options_.piece_spacing) return;
-  last_piece_ = piece.pose;
-  pieces_.add(pieces_.encode(piece, piece.pose));
+void SessionStream::addKeyframe(const Frame& keyframe) {
+  if (last_piece_ && viewpointDistance(*last_piece_, keyframe.pose) < options_.piece_spacing)
+    return;
+  last_piece_ = keyframe.pose;
+  makeMapPiece(keyframe, piece_);
+  pieces_.add(pieces_.encode(piece_, piece_.pose));
 }
 
 std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, double now) {

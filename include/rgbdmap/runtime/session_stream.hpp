@@ -52,9 +52,10 @@ class SessionStream {
   // then places while the budget allows. Reads the graph under its lock once (loop closure
   // waits at most that long).
   std::vector<Record> take(const LoopCloser& graph, double now);
-  // A keyframe of the map at the pieces' resolution (makeMapPiece), its pose the odometry's:
-  // sent once the graph record with its anchor went.
-  void addPiece(const Frame& piece);
+  // A keyframe the map took (its pose the odometry's): made a piece (makeMapPiece) when its
+  // viewpoint is `piece_spacing` from the last piece's, sent once the graph record with its
+  // anchor went.
+  void addKeyframe(const Frame& keyframe);
   // Everything again from the first keyframe (a merger that started late, or lost records).
   void restart();
   const Totals& totals() const { return totals_; }
@@ -67,6 +68,7 @@ class SessionStream {
   std::size_t keyframes_sent_ = 0, edges_sent_ = 0, next_place_ = 0;
   KeyframeStore pieces_;
   std::optional<Eigen::Isometry3d> last_piece_;  // where the last piece was seen from
+  Frame piece_;                                  // buffers
   std::uint64_t next_piece_ = 0;                 // frame index: pieces from it on are still to send
   double budget_ = 0.0;                          // bytes; may go below zero by one place
   double budget_at_ = -1.0;

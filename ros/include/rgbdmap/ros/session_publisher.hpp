@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "rgbdmap/runtime/session_stream.hpp"
 
@@ -18,7 +19,8 @@ namespace rgbdmap {
 // ~session/pieces (std_msgs/UInt8MultiArray, each message one SessionStream record), every
 // `interval` seconds from a thread of its own, within the stream's byte budget. Mapping never
 // waits for it: it reads the graph under the loop closer's lock, as a checkpoint does, and a
-// keyframe is taken at half resolution into a short queue (the oldest dropped when full).
+// keyframe is copied into a short queue (the oldest dropped when full) for this thread to make
+// a map piece of.
 class SessionPublisher {
  public:
   struct Options {
@@ -32,7 +34,8 @@ class SessionPublisher {
   void attach(const LoopCloser* graph, const CameraIntrinsics& camera);
   // Everything again from the first keyframe (~session/resend: a merger that came late).
   void resend() { resend_.store(true); }
-  // A keyframe the map took (tracking thread): queued as a map piece while a graph is attached.
+  // A keyframe the map took (tracking thread): copied, made a map piece on this publisher's
+  // thread while a graph is attached.
   void addKeyframe(const Frame& keyframe);
   // What went out so far (after the last attach(nullptr): final).
   SessionStream::Totals totals() const;
@@ -41,14 +44,16 @@ class SessionPublisher {
  private:
   void loop();
   void send(double now);
+  void takeKeyframes();  // the keyframes queued, into the stream
 
   Options options_;
   std::uint64_t run_;
   ros::Publisher graph_pub_, places_pub_, pieces_pub_;
-  // Pieces made on the tracking thread, for the stream (their own lock: the tracking thread
-  // never waits for a send).
+  // Keyframes copied on the tracking thread, for the stream (their own lock: the tracking thread
+  // never waits for a send), and a few buffers to copy into.
   std::mutex incoming_mutex_;
   std::deque<Frame> incoming_;
+  std::vector<Frame> spare_;
   std::uint64_t pieces_dropped_ = 0;
   std::atomic<bool> attached_{false};
   mutable std::mutex mutex_;
