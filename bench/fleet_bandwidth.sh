@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# What a mapping node sends a fleet's merger, on the wire: `rostopic bw` on each of its session
+# topics (graph, places, map pieces) while a bag is played into it at the recorded rate, with
+# the node's own count and its summary line (frames dropped). A benchmark: the rate depends on
+# how fast the camera discovers new places. Starts a roscore of its own on a free port.
+#   bash bench/fleet_bandwidth.sh [--build DIR] [--tum FOLDER]
+# Default input: a lap of the synthetic 8 x 6 m room (`rgbdmap synth`, a camera walking about
+# 1.5 m/s: the merger test's robot 1).
+set -u
+export LC_ALL=C
+root=$(cd "$(dirname "$0")/.." && pwd)
+build_dir="build"
+tum=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --build) build_dir="$2"; shift 2 ;;
+    --tum) tum="$2"; shift 2 ;;
+    -h|--help) sed -n 2,8p "$0"; exit 0 ;;
+    *) echo "fleet_bandwidth.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+case "$build_dir" in /*) ;; *) build_dir="$root/$build_dir" ;; esac
+node="$build_dir/ros/rgbdmap_node"
+tum2bag="$build_dir/ros/rgbdmap-tum2bag"
+rgbdmap="$build_dir/rgbdmap"
+for binary in "$node" "$tum2bag" "$rgbdmap"; do
+  [ -x "$binary" ] || { echo "fleet_bandwidth.sh: $binary not found; build first" >&2; exit 1; }
+done
+
+work=$(mktemp -d)
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null; done
+  wait 2>/dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+if [ -z "$tum" ]; then
+  tum="$work/walk"
+  "$rgbdmap" synth --room 8x6x3 --path walk --frames 360 --seed 1 --out "$tum" >"$work/synth.log" 2>&1 ||
+    { cat "$work/synth.log"; exit 1; }
+fi
+"$tum2bag" "$tum" "$work/camera.bag" >"$work/tum2bag.log" 2>&1 ||
+  { cat "$work/tum2bag.log"; exit 1; }
+port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_IP=127.0.0.1 ROS_HOME="$work/ros"
+roscore -p "$port" >"$work/roscore.log" 2>&1 &
+pids+=($!)
+wait_for() {  # wait_for SECONDS COMMAND...: until the command succeeds
+  local deadline=$((SECONDS + $1))
+  shift
+  until "$@"; do
+    [ "$SECONDS" -lt "$deadline" ] || return 1
+    sleep 0.2
+  done
+}
+wait_for 30 rostopic list >/dev/null 2>&1 || { cat "$work/roscore.log"; exit 1; }
+
+log="$work/node.log"
+"$node" "_out:=$work/map.pcd" >"$log" 2>&1 &
+node_pid=$!
+topics="graph places pieces"
+for t in $topics; do
+  rostopic bw -w 1000 "/rgbdmap/session/$t" >"$work/bw-$t.log" 2>&1 &
+  pids+=($!)
+done
+rosbag play -q --wait-for-subscribers "$work/camera.bag" --topics /camera/rgb/image_color \
+  /camera/depth/image /camera/rgb/camera_info >"$work/play.log" 2>&1
+wait_for 120 grep -q "camera stopped delivering frames" "$log" || { cat "$log"; exit 1; }
+kill -INT "$node_pid"
+wait "$node_pid"
+sleep 1  # rostopic bw prints once a second
+printf '%-28s %s\n' "topic" "rostopic bw (last average over the run)"
+for t in $topics; do
+  printf '%-28s %s\n' "/rgbdmap/session/$t" "$(grep -o 'average: [^ ]*' "$work/bw-$t.log" | tail -1)"
+done
+grep -o 'session stream: .*' "$log"
+grep -o 'rgbdmap_node: .*' "$log"
