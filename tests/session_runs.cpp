@@ -149,6 +149,10 @@ std::string scoreOf(const std::string& map, const std::string& scene,
   return readFile(json);
 }
 
+double trajectoryError(const Trajectory& estimate, const Trajectory& truth) {
+  return absoluteTrajectoryError(estimate, truth).translation.rmse;
+}
+
 double precisionOf(const std::string& map, const std::string& scene,
                    const std::string& trajectory) {
   return jsonNumber(scoreOf(map, scene, trajectory), "precision");

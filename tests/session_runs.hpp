@@ -57,6 +57,8 @@ std::vector<std::string> streamOf(const Session& saved, std::uint64_t run);
 // Where a run's frame lies in its scene: its keyframes (a TUM trajectory file) aligned to the
 // ground truth's.
 Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& truth);
+// The ATE (m, RMS after a rigid alignment) of `estimate` against `truth`.
+double trajectoryError(const Trajectory& estimate, const Trajectory& truth);
 
 // `rgbdmap evaluate map`'s precision at 1 cm of an odometry map, moved by `trajectory`'s
 // alignment to the scene's ground truth.

@@ -12,10 +12,15 @@
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <filesystem>
+#include <mutex>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/ros/cloud_message.hpp"
@@ -108,6 +113,28 @@ void report(const std::vector<FleetMerger::Robot>& robots) {
           r.name, r.keyframes, r.places);
 }
 
+// Wakes the merging loop when records arrive.
+class Arrivals {
+ public:
+  void notify() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      pending_ = true;
+    }
+    wake_.notify_one();
+  }
+  void waitFor(double seconds) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    wake_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return pending_; });
+    pending_ = false;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool pending_ = false;
+};
+
 int runMerger() {
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -116,6 +143,7 @@ int runMerger() {
   config.loadPreset(s.config);
   if (s.voxel > 0) config.map.voxel_size = s.voxel;
   FleetMerger merger(s.robots, config);
+  Arrivals arrived;
 
   std::atomic<bool> resend_wanted[64];
   if (s.robots.size() > 64) throw InputError(pnh.resolveName("robots") + ": at most 64 robots");
@@ -131,6 +159,7 @@ int runMerger() {
               const std::string record(m->data.begin(), m->data.end());
               if (merger.receive(i, record, name) == SessionAssembler::Result::kGap)
                 resend_wanted[i].store(true);
+              arrived.notify();
             } catch (const InputError& e) {
               spdlog::warn("merger: {} (record ignored)", e.what());
             }
@@ -158,7 +187,16 @@ int runMerger() {
       }(),
       s.merged_frame, save_map.getService());
 
-  ros::WallTime next_map(0.0);
+  // The merged map on a thread of its own: fusing new pieces takes time the merges (and so the
+  // TF a robot is placed by) should not wait for.
+  std::atomic<bool> map_stale{false}, stopping{false};
+  std::thread map_thread([&] {
+    while (!stopping.load()) {
+      if (map_stale.exchange(false))
+        map_pub.publish(toCloudMessage(merger.map(), s.merged_frame, ros::Time::now().toSec()));
+      ros::WallDuration(std::max(0.05, s.map_interval)).sleep();
+    }
+  });
   while (ros::ok()) {
     for (std::size_t i = 0; i < s.robots.size(); ++i) {
       if (!resend_wanted[i].exchange(false)) continue;
@@ -186,12 +224,13 @@ int runMerger() {
       t.transform.rotation.w = q.w();
       tf.sendTransform(t);
     }
-    if (changed && ros::WallTime::now() >= next_map) {
-      map_pub.publish(toCloudMessage(merger.map(), s.merged_frame, now.toSec()));
-      next_map = ros::WallTime::now() + ros::WallDuration(s.map_interval);
-    }
-    ros::WallDuration(s.merge_interval).sleep();
+    if (changed) map_stale.store(true);
+    // Until records arrive (a merge costs what arrived since the last: a place shared is placed
+    // within a second), and at least every ~merge_interval s for TF.
+    arrived.waitFor(s.merge_interval);
   }
+  stopping.store(true);
+  map_thread.join();
   // Stopped (Ctrl-C): the merged map and session as they are.
   merger.merge();
   std::string message;

@@ -60,7 +60,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
   if (!(s.map_interval >= 0))
     throw InputError("parameter " + nh.resolveName("map_interval") + ": must be >= 0");
   s.grid_interval = numberParam(nh, "grid_interval", "5");
-  s.session_interval = numberParam(nh, "session_interval", "1");
+  s.session_interval = numberParam(nh, "session_interval", "0.5");
   s.session_rate = numberParam(nh, "session_rate", "750000");
   if (!(s.session_rate > 0))
     throw InputError("parameter " + nh.resolveName("session_rate") + ": must be > 0 (bytes/s)");

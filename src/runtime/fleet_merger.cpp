@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/runtime/map_piece.hpp"
 
 namespace rgbdmap {
@@ -43,6 +44,7 @@ SessionAssembler::Result FleetMerger::receive(std::size_t index, const std::stri
                    robots_[index].name, *run);
   }
   const SessionAssembler::Result result = part->stream.apply(record, source);
+  part->last_record_at = steadySeconds();
   changed_ = changed_ || result != SessionAssembler::Result::kGap;
   // Keyframes are numbered for the merged map's corrections as they arrive, once for good.
   while (part->slots.size() < part->stream.keyframes()) part->slots.push_back(slots_++);
@@ -65,7 +67,7 @@ bool FleetMerger::merge() {
     for (Part* p : order) sessions.push_back(p->stream.session());
   }
   std::vector<SessionMerger::Placement> placements;
-  Session merged = SessionMerger(settings_).merge(sessions, placements);
+  Session merged = SessionMerger(settings_).merge(sessions, placements, &comparisons_);
   merged.configuration = settings_.toYaml();
   merged.created_by = "rgbdmap merger";
 
@@ -110,7 +112,10 @@ bool FleetMerger::merge() {
     const int linked = newest->placement.linked_to;
     r.linked_to = linked >= 0 ? robots_[order[static_cast<std::size_t>(linked)]->robot].name : "";
     if (!was_placed && robot > 0)
-      spdlog::info("merger: {} placed, linked with {} by {} places", r.name, r.linked_to, r.links);
+      spdlog::info(
+          "merger: {} placed, linked with {} by {} places ({:.2f} s after its newest "
+          "record arrived)",
+          r.name, r.linked_to, r.links, steadySeconds() - newest->last_record_at);
   }
   return true;
 }

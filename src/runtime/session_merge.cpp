@@ -40,9 +40,22 @@ struct SessionMerger::Match {
 SessionMerger::SessionMerger(const Config& settings, Options options)
     : settings_(settings), options_(options) {}
 
+SessionMerger::PlaceComparisons::Result& SessionMerger::PlaceComparisons::of(
+    const std::shared_ptr<const PlaceRecognition::Place>& target,
+    const std::shared_ptr<const PlaceRecognition::Place>& query, bool& known) {
+  const auto key = std::make_pair(target.get(), query.get());
+  const auto found = results_.find(key);
+  known = found != results_.end();
+  if (known) return found->second;
+  held_.insert(target);
+  held_.insert(query);
+  return results_[key];
+}
+
 std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merged,
-                                                             const Session& session) const {
-  if (session.keyframes.empty()) return findPlaceMatches(merged, session);
+                                                             const Session& session,
+                                                             PlaceComparisons* comparisons) const {
+  if (session.keyframes.empty()) return findPlaceMatches(merged, session, comparisons);
   PlaceRecognition recognition(session.camera, settings_.tracking, settings_.loop,
                                settings_.filter.min_depth, settings_.filter.max_depth);
   std::vector<int> candidates;
@@ -90,8 +103,10 @@ std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merg
   return matches;
 }
 
-std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(const Session& merged,
-                                                                  const Session& session) const {
+std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(
+    const Session& merged, const Session& session, PlaceComparisons* comparisons) const {
+  PlaceComparisons own;  // none kept: this merge's only
+  PlaceComparisons& compared = comparisons ? *comparisons : own;
   const PlaceMatcher matcher(session.camera, settings_.loop);
   std::vector<int> targets, queries;
   for (std::size_t id = 0; id < merged.graph.places.size(); ++id)
@@ -104,12 +119,20 @@ std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(const Session&
       std::max<std::size_t>(1, queries.size() / std::max<std::size_t>(1, options_.max_queries));
   for (std::size_t i = 0; i < queries.size(); i += stride) {
     const int node = queries[i];
-    const PlaceRecognition::Place& query = *session.graph.places[static_cast<std::size_t>(node)];
+    const auto& query = session.graph.places[static_cast<std::size_t>(node)];
+    const auto pair = [&](int target) -> PlaceComparisons::Result& {
+      bool known = false;
+      PlaceComparisons::Result& r =
+          compared.of(merged.graph.places[static_cast<std::size_t>(target)], query, known);
+      if (!known)
+        r.alike =
+            matcher.similarity(*merged.graph.places[static_cast<std::size_t>(target)], *query);
+      return r;
+    };
     // The most alike places first, as loop closure ranks its candidates.
     std::vector<std::pair<int, int>> ranked;  // (matches, id)
     for (const int target : targets) {
-      const int alike =
-          matcher.similarity(*merged.graph.places[static_cast<std::size_t>(target)], query);
+      const int alike = pair(target).alike;
       if (alike >= settings_.loop.min_matches) ranked.emplace_back(alike, target);
     }
     std::stable_sort(ranked.begin(), ranked.end(),
@@ -117,8 +140,13 @@ std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(const Session&
     if (static_cast<int>(ranked.size()) > settings_.loop.max_candidates)
       ranked.resize(static_cast<std::size_t>(settings_.loop.max_candidates));
     for (const auto& [alike, target] : ranked) {
-      const std::optional<LoopMeasurement> found =
-          matcher.match(*merged.graph.places[static_cast<std::size_t>(target)], query);
+      PlaceComparisons::Result& result = pair(target);
+      if (!result.verified) {
+        result.found =
+            matcher.match(*merged.graph.places[static_cast<std::size_t>(target)], *query);
+        result.verified = true;
+      }
+      const std::optional<LoopMeasurement>& found = result.found;
       if (!found) continue;
       Match m;
       m.node = node;
@@ -217,7 +245,8 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
 }
 
 Session SessionMerger::merge(const std::vector<Session>& sessions,
-                             std::vector<Placement>& placements) const {
+                             std::vector<Placement>& placements,
+                             PlaceComparisons* comparisons) const {
   placements.assign(sessions.size(), Placement{});
   Session merged;
   if (sessions.empty()) return merged;
@@ -233,7 +262,7 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
     progress = false;
     for (std::size_t i = 1; i < sessions.size(); ++i) {
       if (placements[i].placed) continue;
-      const std::vector<Match> matches = findMatches(merged, sessions[i]);
+      const std::vector<Match> matches = findMatches(merged, sessions[i], comparisons);
       const std::optional<std::vector<Match>> links = agreeing(matches);
       spdlog::debug("merge: session {}: {} places found, {} agreeing", i, matches.size(),
                     links ? links->size() : 0);

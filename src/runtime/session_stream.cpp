@@ -261,7 +261,9 @@ SessionAssembler::Result SessionAssembler::applyPlace(BinaryReader& in) {
     reset(run);
     result = Result::kNewRun;
   }
-  places_[id] = std::move(place);
+  // Sent again: the one known stays (a place does not change once sent; the merger's comparisons
+  // of it stay valid).
+  places_.emplace(id, std::move(place));
   return result;
 }
 

@@ -68,6 +68,7 @@ class FleetMerger {
     std::vector<std::int64_t> slots;   // each graph keyframe's id in corrections_
     std::size_t merged_keyframes = 0;  // those the latest merge placed (their corrections known)
     std::set<std::uint64_t> fused;     // the frame indices of its pieces fused so far
+    double last_record_at = 0.0;       // steady-clock seconds
   };
   struct CameraMap {  // the TSDF of the pieces of one camera
     CameraIntrinsics camera;
@@ -76,6 +77,7 @@ class FleetMerger {
 
   Config settings_;
   std::mutex merging_;  // one merge at a time (the loop's and a save's), the newest written last
+  SessionMerger::PlaceComparisons comparisons_;  // of all merges so far (under merging_)
   mutable std::mutex mutex_;
   std::vector<Robot> robots_;
   std::vector<std::unique_ptr<Part>> parts_;  // in arrival order; the first robot's first first

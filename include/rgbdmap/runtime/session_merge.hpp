@@ -1,7 +1,10 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <map>
+#include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -40,22 +43,46 @@ class SessionMerger {
     std::size_t first_keyframe = 0;  // its keyframes' place in the merged graph
   };
 
+  // What comparing two places gave (places found by their places alone: a robot's stream). Kept
+  // by a caller that merges the same growing sessions again and again (the fleet's merger), so
+  // that each pair is compared once: a merge then costs what arrived since the last one. Holds
+  // the places it has seen (their addresses are its keys).
+  class PlaceComparisons {
+   public:
+    struct Result {
+      int alike = 0;  // PlaceMatcher::similarity
+      bool verified = false;
+      std::optional<LoopMeasurement> found;  // PlaceMatcher::match, once verified
+    };
+    Result& of(const std::shared_ptr<const PlaceRecognition::Place>& target,
+               const std::shared_ptr<const PlaceRecognition::Place>& query, bool& known);
+
+   private:
+    std::map<std::pair<const PlaceRecognition::Place*, const PlaceRecognition::Place*>, Result>
+        results_;
+    std::set<std::shared_ptr<const PlaceRecognition::Place>> held_;
+  };
+
   // `settings`: the first session's effective configuration (tracking, loop and filter keys).
   SessionMerger(const Config& settings, Options options);
   explicit SessionMerger(const Config& settings) : SessionMerger(settings, Options{}) {}
 
   // The merged session (kept keyframes, places and graph of every placed session, anchors and
   // ids renumbered) and where each input was placed.
-  Session merge(const std::vector<Session>& sessions, std::vector<Placement>& placements) const;
+  // `comparisons` (may be null): what earlier merges found, kept and added to.
+  Session merge(const std::vector<Session>& sessions, std::vector<Placement>& placements,
+                PlaceComparisons* comparisons = nullptr) const;
 
  private:
   struct Match;
   // The session's kept keyframes found among the merged places, each with the session's frame
   // it implies.
-  std::vector<Match> findMatches(const Session& merged, const Session& session) const;
+  std::vector<Match> findMatches(const Session& merged, const Session& session,
+                                 PlaceComparisons* comparisons) const;
   // The same for a session without kept keyframes (streamed by a robot: no images), by its
   // places: each one looked for among the merged places (PlaceMatcher).
-  std::vector<Match> findPlaceMatches(const Session& merged, const Session& session) const;
+  std::vector<Match> findPlaceMatches(const Session& merged, const Session& session,
+                                      PlaceComparisons* comparisons) const;
   std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
   void append(Session& merged, std::vector<int>& owner, int index, const Session& session,
               const std::vector<Match>& links) const;

@@ -19,7 +19,7 @@ struct NodeSettings {
   double grid_interval = 5;  // ~grid_interval: seconds between published grids (< 0: no ~grid)
   // ~session_interval: seconds between looks at the graph for ~session/graph and
   // ~session/places (<= 0: not streamed); ~session_rate: bytes a second they stay under.
-  double session_interval = 1;
+  double session_interval = 0.5;
   double session_rate = 500e3;
   std::string grid;     // ~grid: the grid's PGM (and YAML) written with every save ("" = none)
   std::string octomap;  // ~octomap: the OctoMap written with every save and ~save_octomap

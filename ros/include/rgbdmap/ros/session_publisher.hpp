@@ -24,7 +24,7 @@ namespace rgbdmap {
 class SessionPublisher {
  public:
   struct Options {
-    double interval = 1.0;  // seconds between looks at the graph
+    double interval = 0.5;  // seconds between looks at the graph
     SessionStream::Options stream;
   };
   SessionPublisher(ros::NodeHandle& private_nh, Options options);
