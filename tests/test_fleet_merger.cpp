@@ -63,6 +63,48 @@ TEST(FleetMerger, ARobotOnAMappedRouteIsPlacedWhereItIs) {
   EXPECT_GT(merged.size(), 0.9 * alone.size()) << merged.size() << " vs " << alone.size();
 }
 
+TEST(FleetMerger, AMergerRestartedFromItsSavedSessionPicksUpAgain) {
+  const Session& rpy = rpySession();
+  Eigen::Isometry3d elsewhere = Eigen::Isometry3d::Identity();
+  elsewhere.translation() = Eigen::Vector3d(1.0, 0.0, 0.5);
+  FleetMerger first({"/robot1", "/robot2"}, Config{});
+  for (const std::string& r : test::streamOf(rpy, 11)) first.receive(0, r, "/robot1/x");
+  for (const std::string& r : test::streamOf(movedSession(rpy, elsewhere), 22))
+    first.receive(1, r, "/robot2/x");
+  first.merge();
+  const std::size_t points = first.map().size();
+  ASSERT_TRUE(first.robots()[1].placed);
+  const std::string dir = test::freshDir();
+  std::string error;
+  ASSERT_TRUE(writeSession(first.session(), dir + "/merged.session", error)) << error;
+
+  // Restarted: both robots back where they were, and the map, before either sends anything.
+  const Session saved = readSession(dir + "/merged.session");
+  ASSERT_EQ(saved.streams.size(), 2u);
+  FleetMerger again({"/robot1", "/robot2"}, Config{});
+  EXPECT_EQ(again.resume(saved, dir + "/merged.session"), 2u);
+  ASSERT_TRUE(again.merge());
+  auto robots = again.robots();
+  ASSERT_TRUE(robots[1].placed);
+  const Eigen::Isometry3d moved = first.robots()[1].transform.inverse() * robots[1].transform;
+  EXPECT_LT(moved.translation().norm(), 0.002);
+  EXPECT_EQ(robots[1].keyframes, rpy.graph.keyframes.size());
+  EXPECT_NEAR(static_cast<double>(again.map().size()), static_cast<double>(points),
+              0.02 * static_cast<double>(points));
+  // Robot 1 did not notice and sends everything again (a merger asked): nothing twice.
+  for (const std::string& r : test::streamOf(rpy, 11)) again.receive(0, r, "/robot1/x");
+  again.merge();
+  robots = again.robots();
+  EXPECT_EQ(robots[0].keyframes, rpy.graph.keyframes.size());
+  EXPECT_EQ(robots[0].runs, 1u);
+  EXPECT_EQ(again.session().graph.keyframes.size(), 2 * rpy.graph.keyframes.size());
+  EXPECT_NEAR(static_cast<double>(again.map().size()), static_cast<double>(points),
+              0.02 * static_cast<double>(points));
+  // A robot not among the merger's now is left out.
+  FleetMerger other({"/robot1", "/robot3"}, Config{});
+  EXPECT_EQ(other.resume(saved, dir + "/merged.session"), 1u);
+}
+
 TEST(FleetMerger, ARobotElsewhereStaysUnplacedAndARestartKeepsTheOldRun) {
   const Session& rpy = rpySession();
   FleetMerger merger({"/robot1", "/robot2"}, Config{});

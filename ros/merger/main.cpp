@@ -41,6 +41,7 @@ struct Settings {
   double map_interval = 2.0;
   double merge_interval = 1.0;
   double voxel = 0.0;  // the merged map's; 0: the configuration's map.voxel_size
+  bool resume = true;  // pick up from the session saved at ~out
 };
 
 // ~robots: a list of strings, or one string of names separated by spaces or commas.
@@ -76,6 +77,7 @@ Settings readSettings(const ros::NodeHandle& pnh) {
   pnh.param("map_interval", s.map_interval, s.map_interval);
   pnh.param("merge_interval", s.merge_interval, s.merge_interval);
   pnh.param("voxel", s.voxel, s.voxel);
+  pnh.param("resume", s.resume, s.resume);
   if (!(s.merge_interval > 0) || !(s.map_interval >= 0) || !(s.voxel >= 0))
     throw InputError("parameters " + pnh.resolveName("merge_interval") + ", " +
                      pnh.resolveName("map_interval") + " and " + pnh.resolveName("voxel") +
@@ -85,12 +87,38 @@ Settings readSettings(const ros::NodeHandle& pnh) {
 
 std::string frameOf(const std::string& robot) { return robot.substr(1) + "/map"; }
 
+std::string sessionPathOf(const Settings& s) {
+  return (std::filesystem::path(s.out).replace_extension(".session")).string();
+}
+
+// A merger restarted with the session it saved picks up from it: the robots' streams as they
+// were (a robot gone since keeps its part), then what the robots send again.
+// Returns whether it did.
+bool resumeFrom(FleetMerger& merger, const Settings& s, const ros::NodeHandle& pnh) {
+  const std::string path = sessionPathOf(s);
+  std::error_code ec;
+  if (!s.resume || !std::filesystem::exists(path, ec)) return false;
+  Session saved;
+  try {
+    saved = readSession(path);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + " (the merged session to pick up from; move it away " +
+                     "or set " + pnh.resolveName("resume") + ":=false to start afresh)");
+  }
+  const std::size_t runs = merger.resume(saved, path);
+  merger.merge();
+  std::size_t placed = 0;
+  for (const FleetMerger::Robot& r : merger.robots()) placed += r.placed ? 1 : 0;
+  spdlog::info("merger: picked up from {}: {} of its {} runs, {} robots placed", path, runs,
+               saved.streams.size(), placed);
+  return runs > 0;
+}
+
 // The merged map and session, written beside each other; the answer says where or why not.
 bool save(FleetMerger& merger, const Settings& s, std::string& message) {
   const MapCloud map = merger.map();
   const Session session = merger.session();
-  const std::string session_path =
-      (std::filesystem::path(s.out).replace_extension(".session")).string();
+  const std::string session_path = sessionPathOf(s);
   std::string error;
   if (session.graph.keyframes.empty()) {
     message = "nothing to save: no robot's stream has arrived";
@@ -143,6 +171,7 @@ int runMerger() {
   config.loadPreset(s.config);
   if (s.voxel > 0) config.map.voxel_size = s.voxel;
   FleetMerger merger(s.robots, config);
+  const bool resumed = resumeFrom(merger, s, pnh);
   Arrivals arrived;
 
   std::atomic<bool> resend_wanted[64];
@@ -189,7 +218,7 @@ int runMerger() {
 
   // The merged map on a thread of its own: fusing new pieces takes time the merges (and so the
   // TF a robot is placed by) should not wait for.
-  std::atomic<bool> map_stale{false}, stopping{false};
+  std::atomic<bool> map_stale{resumed}, stopping{false};
   std::thread map_thread([&] {
     while (!stopping.load()) {
       if (map_stale.exchange(false))

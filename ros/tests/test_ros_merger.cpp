@@ -92,6 +92,32 @@ TEST_F(RosMerger, TwoRobotsBecomeOneMapARobotElsewhereIsReportedAKilledOnesPartS
   EXPECT_NE(log.find("/robot3 not placed"), std::string::npos) << log;
   EXPECT_EQ(log.find("/robot3 placed"), std::string::npos) << log;
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/merged.session/graph.bin")) << log;
+
+  // The merger restarted from what it saved (a copy), with no robot running any more: it picks
+  // up every robot's part, robot 2's too, and places them again.
+  std::filesystem::copy(dir_ + "/merged.session", dir_ + "/restarted.session",
+                        std::filesystem::copy_options::recursive);
+  const ros::Time restarted = ros::Time::now();
+  Process again(
+      {mergerBinary(), "_robots:=robot1 robot2 robot3", "_out:=" + dir_ + "/restarted.pcd"},
+      dir_ + "/restarted.log");
+  ASSERT_TRUE(waitUntil(
+      [&] { return readFile(dir_ + "/restarted.log").find("picked up from") != std::string::npos; },
+      60))
+      << readFile(dir_ + "/restarted.log");
+  EXPECT_NE(readFile(dir_ + "/restarted.log").find("3 of its 3 runs"), std::string::npos)
+      << readFile(dir_ + "/restarted.log");
+  if (kRealTime) {
+    EXPECT_NE(readFile(dir_ + "/restarted.log").find("2 robots placed"), std::string::npos)
+        << readFile(dir_ + "/restarted.log");
+    EXPECT_TRUE(waitUntil(
+        [&] {
+          return buffer.canTransform("merged_map", "robot2/map", restarted + ros::Duration(0.5));
+        },
+        30));
+  }
+  again.signal(SIGINT);
+  ASSERT_EQ(again.wait(60), 0) << readFile(dir_ + "/restarted.log");
   if (!kRealTime) return;
 
   // Robot 2's frame in robot 1's against the truth.

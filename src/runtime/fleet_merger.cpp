@@ -31,12 +31,17 @@ SessionAssembler::Result FleetMerger::receive(std::size_t index, const std::stri
   if (!run) return SessionAssembler().apply(record, source);
   std::lock_guard<std::mutex> lock(mutex_);
   Part* part = nullptr;
-  for (auto& p : parts_)
-    if (p->robot == index && p->run == *run) part = p.get();
+  std::size_t part_index = 0;
+  for (std::size_t i = 0; i < parts_.size(); ++i)
+    if (parts_[i]->robot == index && parts_[i]->run == *run) {
+      part = parts_[i].get();
+      part_index = i;
+    }
   if (!part) {
     // A robot's new run: the runs before stay (their maps are not lost).
     parts_.push_back(std::make_unique<Part>());
     part = parts_.back().get();
+    part_index = parts_.size() - 1;
     part->robot = index;
     part->run = *run;
     if (++robots_.at(index).runs > 1)
@@ -47,7 +52,10 @@ SessionAssembler::Result FleetMerger::receive(std::size_t index, const std::stri
   part->last_record_at = steadySeconds();
   changed_ = changed_ || result != SessionAssembler::Result::kGap;
   // Keyframes are numbered for the merged map's corrections as they arrive, once for good.
-  while (part->slots.size() < part->stream.keyframes()) part->slots.push_back(slots_++);
+  while (part->slots.size() < part->stream.keyframes()) {
+    slot_owner_.emplace_back(part_index, part->slots.size());
+    part->slots.push_back(slots_++);
+  }
   return result;
 }
 
@@ -125,9 +133,37 @@ std::vector<FleetMerger::Robot> FleetMerger::robots() const {
   return robots_;
 }
 
-Session FleetMerger::session() const {
+Session FleetMerger::session() {
+  const std::lock_guard<std::mutex> mapping(mapping_);  // (map()'s order: mapping_, mutex_)
   std::lock_guard<std::mutex> lock(mutex_);
-  return merged_;
+  Session saved = merged_;
+  // The pieces the maps keep (fused: let go by the streams), back to their runs.
+  std::vector<std::vector<KeyframeStore::Entry>> fused(parts_.size());
+  for (const CameraMap& m : maps_)
+    for (KeyframeStore::Entry piece : m.mapper->keptKeyframes().entries()) {
+      const auto& [part, node] = slot_owner_.at(static_cast<std::size_t>(piece.anchor));
+      piece.anchor = static_cast<std::int64_t>(node);
+      fused[part].push_back(std::move(piece));
+    }
+  for (std::size_t i = 0; i < parts_.size(); ++i)
+    saved.streams.push_back({robots_[parts_[i]->robot].name, parts_[i]->stream.records(fused[i])});
+  return saved;
+}
+
+std::size_t FleetMerger::resume(const Session& saved, const std::string& source) {
+  std::size_t runs = 0;
+  for (const Session::Stream& stream : saved.streams) {
+    std::size_t robot = 0;
+    while (robot < robots_.size() && robots_[robot].name != stream.robot) ++robot;
+    if (robot == robots_.size()) {
+      spdlog::info("merger: {}: {} is not among the robots: its run is left out", source,
+                   stream.robot);
+      continue;
+    }
+    for (const std::string& record : stream.records) receive(robot, record, source);
+    ++runs;
+  }
+  return runs;
 }
 
 MapCloud FleetMerger::map() {

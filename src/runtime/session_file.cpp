@@ -28,9 +28,11 @@ constexpr const char* kConfigFile = "config.yaml";
 constexpr const char* kGraphFile = "graph.bin";
 constexpr const char* kPlacesFile = "places.bin";
 constexpr const char* kKeyframesFile = "keyframes.bin";
+constexpr const char* kStreamsFile = "streams.bin";
 constexpr char kGraphKind[5] = "GRPH";
 constexpr char kPlacesKind[5] = "PLCS";
 constexpr char kKeyframesKind[5] = "KFRM";
+constexpr char kStreamsKind[5] = "STRM";
 
 // The graph's keyframes and edges, counted into `summary`, from a saved graph or a live one.
 template <typename Graph>
@@ -187,6 +189,25 @@ void readKeyframes(BinaryReader in, Session& s) {
   if (!in.atEnd()) in.fail("corrupt (bytes after the keyframes)");
 }
 
+void writeStreams(const Session& s, RecordWriter& out, SessionSummary& /*summary*/) {
+  out.put<std::uint64_t>(s.streams.size());
+  for (const Session::Stream& stream : s.streams) {
+    out.putString(stream.robot);
+    out.put<std::uint64_t>(stream.records.size());
+    for (const std::string& record : stream.records) out.putString(record);
+  }
+}
+
+void readStreams(BinaryReader in, Session& s) {
+  s.streams.resize(in.count(16));
+  for (Session::Stream& stream : s.streams) {
+    stream.robot = in.getString();
+    stream.records.resize(in.count(8));
+    for (std::string& record : stream.records) record = in.getString();
+  }
+  if (!in.atEnd()) in.fail("corrupt (bytes after the streams)");
+}
+
 std::string summaryText(const Session& s, const SessionSummary& summary) {
   std::ostringstream out;
   out << "# rgbdmap session (docs/sessions.md): what a later run needs to go on from this map\n"
@@ -276,11 +297,12 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
         },
         error);
   };
-  const bool written = record(kGraphFile, kGraphKind, writeGraph) &&
-                       record(kPlacesFile, kPlacesKind, writePlaces) &&
-                       record(kKeyframesFile, kKeyframesKind, writeKeyframes) &&
-                       writeBytesAtomically(in(kConfigFile), session.configuration, error) &&
-                       writeBytesAtomically(in(kSummaryFile), summaryText(session, summary), error);
+  const bool written =
+      record(kGraphFile, kGraphKind, writeGraph) && record(kPlacesFile, kPlacesKind, writePlaces) &&
+      record(kKeyframesFile, kKeyframesKind, writeKeyframes) &&
+      (session.streams.empty() || record(kStreamsFile, kStreamsKind, writeStreams)) &&
+      writeBytesAtomically(in(kConfigFile), session.configuration, error) &&
+      writeBytesAtomically(in(kSummaryFile), summaryText(session, summary), error);
   if (!written) {
     fs::remove_all(fresh, ec);
     return false;
@@ -321,6 +343,8 @@ Session readSession(const std::string& path) {
   readGraph(openRecord(in(kGraphFile), kGraphKind, Session::kFormatVersion), session);
   readPlaces(openRecord(in(kPlacesFile), kPlacesKind, Session::kFormatVersion), session);
   readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
+  if (fs::exists(in(kStreamsFile), ec))
+    readStreams(openRecord(in(kStreamsFile), kStreamsKind, Session::kFormatVersion), session);
   return session;
 }
 

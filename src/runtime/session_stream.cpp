@@ -61,6 +61,62 @@ std::shared_ptr<const std::vector<std::uint8_t>> getImage(BinaryReader& in) {
   return std::make_shared<const std::vector<std::uint8_t>>(std::move(png));
 }
 
+// A graph record: the keyframes from `first` on and the edges from `first_edge` on.
+template <typename Graph>
+std::string graphRecord(std::uint64_t run, const CameraIntrinsics& camera, const Graph& graph,
+                        std::size_t first, std::size_t first_edge) {
+  std::string bytes;
+  RecordWriter out(bytes, kGraphKind, kVersion);
+  out.put<std::uint64_t>(run);
+  putCamera(out, camera);
+  const std::size_t keyframes = graph.keyframes(), edges = graph.edges().size();
+  out.put<std::uint64_t>(first);
+  out.put<std::uint64_t>(keyframes - first);
+  for (std::size_t id = first; id < keyframes; ++id) {
+    const LoopCloser::Saved::Keyframe k = graph.keyframe(id);
+    out.put(k.timestamp);
+    putPose(out, k.odometry);
+    putPose(out, k.pose);
+  }
+  out.put<std::uint64_t>(first_edge);
+  out.put<std::uint64_t>(edges - first_edge);
+  for (std::size_t i = first_edge; i < edges; ++i) putEdge(out, graph.edges()[i]);
+  out.finish();
+  return bytes;
+}
+
+std::string placeRecord(std::uint64_t run, std::size_t id, const PlaceRecognition::Place& place) {
+  std::string bytes;
+  RecordWriter out(bytes, kPlaceKind, kVersion);
+  out.put<std::uint64_t>(run);
+  out.put<std::uint64_t>(id);
+  putPlace(out, place);
+  out.finish();
+  return bytes;
+}
+
+std::string pieceRecord(std::uint64_t run, const KeyframeStore::Entry& e) {
+  std::string bytes;
+  RecordWriter out(bytes, kPieceKind, kVersion);
+  out.put<std::uint64_t>(run);
+  out.put<std::uint64_t>(e.index);
+  out.put(e.timestamp);
+  out.put<std::int64_t>(e.anchor);
+  putPose(out, e.pose);
+  putImage(out, *e.depth_png);
+  putImage(out, *e.colour_png);
+  out.finish();
+  return bytes;
+}
+
+// An assembled graph seen like a live one (LoopCloser::GraphView).
+struct AssembledGraph {
+  const LoopCloser::Saved& saved;
+  std::size_t keyframes() const { return saved.keyframes.size(); }
+  const LoopCloser::Saved::Keyframe& keyframe(std::size_t id) const { return saved.keyframes[id]; }
+  const std::vector<PoseGraph::Edge>& edges() const { return saved.edges; }
+};
+
 }  // namespace
 
 SessionStream::SessionStream(std::uint64_t run, const CameraIntrinsics& camera, Options options)
@@ -98,21 +154,7 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
     keyframes = view.keyframes();
     const std::size_t edges = view.edges().size();
     if (keyframes == keyframes_sent_ && edges == edges_sent_) return;
-    RecordWriter out(bytes, kGraphKind, kVersion);
-    out.put<std::uint64_t>(run_);
-    putCamera(out, camera_);
-    out.put<std::uint64_t>(keyframes_sent_);
-    out.put<std::uint64_t>(keyframes - keyframes_sent_);
-    for (std::size_t id = keyframes_sent_; id < keyframes; ++id) {
-      const LoopCloser::Saved::Keyframe k = view.keyframe(id);
-      out.put(k.timestamp);
-      putPose(out, k.odometry);
-      putPose(out, k.pose);
-    }
-    out.put<std::uint64_t>(edges_sent_);
-    out.put<std::uint64_t>(edges - edges_sent_);
-    for (std::size_t i = edges_sent_; i < edges; ++i) putEdge(out, view.edges()[i]);
-    out.finish();
+    bytes = graphRecord(run_, camera_, view, keyframes_sent_, edges_sent_);
     totals_.keyframes += keyframes - keyframes_sent_;
     totals_.edges += edges - edges_sent_;
     keyframes_sent_ = keyframes;
@@ -143,25 +185,13 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
     std::string record;
     // Places first: they place the robot (and its pieces are of no use until it is).
     if (place_due) {
-      RecordWriter out(record, kPlaceKind, kVersion);
-      out.put<std::uint64_t>(run_);
-      out.put<std::uint64_t>(next_place_);
-      putPlace(out, *places[next_place_]);
-      out.finish();
+      record = placeRecord(run_, next_place_, *places[next_place_]);
       ++next_place_;
       ++totals_.places;
       records.push_back({Record::Kind::kPlace, std::move(record)});
     } else {
       const KeyframeStore::Entry& e = pieces_[piece];
-      RecordWriter out(record, kPieceKind, kVersion);
-      out.put<std::uint64_t>(run_);
-      out.put<std::uint64_t>(e.index);
-      out.put(e.timestamp);
-      out.put<std::int64_t>(e.anchor);
-      putPose(out, e.pose);
-      putImage(out, *e.depth_png);
-      putImage(out, *e.colour_png);
-      out.finish();
+      record = pieceRecord(run_, e);
       next_piece_ = e.index + 1;
       ++piece;
       ++totals_.pieces;
@@ -289,6 +319,17 @@ SessionAssembler::Result SessionAssembler::applyPiece(BinaryReader& in) {
   }
   pieces_[e.index] = std::move(e);
   return result;
+}
+
+std::vector<std::string> SessionAssembler::records(
+    const std::vector<KeyframeStore::Entry>& more_pieces) const {
+  std::vector<std::string> records;
+  if (!started_) return records;
+  records.push_back(graphRecord(run_, session_.camera, AssembledGraph{session_.graph}, 0, 0));
+  for (const auto& [id, place] : places_) records.push_back(placeRecord(run_, id, *place));
+  for (const auto& [index, piece] : pieces_) records.push_back(pieceRecord(run_, piece));
+  for (const KeyframeStore::Entry& piece : more_pieces) records.push_back(pieceRecord(run_, piece));
+  return records;
 }
 
 std::vector<KeyframeStore::Entry> SessionAssembler::mapPieces() const {

@@ -50,9 +50,14 @@ class FleetMerger {
   // nothing new). Runs SessionMerger without holding the lock.
   bool merge();
   std::vector<Robot> robots() const;
-  // The merged graph and places of every placed run (no kept keyframes: the pieces are at half
-  // resolution, not what a run continued from the session would fuse).
-  Session session() const;
+  // The merged graph and places of every placed run (no kept keyframes: the pieces are at a
+  // quarter of the resolution, not what a run continued from the session would fuse), and every
+  // run's stream as received (Session::streams, its pieces as the map keeps them).
+  Session session();
+  // Picks up from a saved merged session: its robots' streams taken in again, as if they had
+  // just arrived (those of robots not in the list are left out, and said). Returns the runs
+  // taken. A robot that then sends its session again adds nothing twice.
+  std::size_t resume(const Session& saved, const std::string& source);
   // The merged map: the placed runs' pieces that have not been fused yet are, and the map is
   // brought to the latest merge's poses. Robots with another camera than the first placed one's
   // are fused into TSDFs of their own (their clouds are written together).
@@ -83,7 +88,9 @@ class FleetMerger {
   std::vector<std::unique_ptr<Part>> parts_;  // in arrival order; the first robot's first first
   bool changed_ = false;
   Session merged_;
-  std::int64_t slots_ = 0;       // keyframes received, over all parts
+  std::int64_t slots_ = 0;  // keyframes received, over all parts
+  // Each slot's part (index in parts_) and keyframe in it.
+  std::vector<std::pair<std::size_t, std::size_t>> slot_owner_;
   PoseCorrections corrections_;  // by slot: the merged graph's correction of each keyframe
 
   std::mutex mapping_;  // one map() at a time: the mappers are not shared

@@ -27,6 +27,14 @@ struct Session {
   // as they are when written (streamed under its lock, not copied) and `graph` is not used.
   const LoopCloser* live_graph = nullptr;
   std::vector<KeyframeStore::Entry> keyframes;  // the kept ones, images shared
+  // A fleet's merged session (rgbdmap_merger): each robot run's session stream as the merger
+  // had it (SessionStream records: graph, places, map pieces), so that a merger restarted from
+  // the session picks up again (streams.bin; none in a run's own session).
+  struct Stream {
+    std::string robot;
+    std::vector<std::string> records;
+  };
+  std::vector<Stream> streams;
 };
 
 // What a session folder holds, read from it (`rgbdmap session`, the log).

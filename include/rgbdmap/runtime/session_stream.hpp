@@ -100,6 +100,9 @@ class SessionAssembler {
   // The pieces so far, oldest first: images as sent, `pose` the odometry's, `anchor` the
   // keyframe (of this run's graph) whose correction moves it.
   std::vector<KeyframeStore::Entry> mapPieces() const;
+  // What was assembled, as the records that would assemble it again (a merger saving what it
+  // has, to pick up from), with `more_pieces` (let go here, kept elsewhere) among its pieces.
+  std::vector<std::string> records(const std::vector<KeyframeStore::Entry>& more_pieces) const;
   // Lets a piece go once it is kept elsewhere (the merger's map).
   void forgetMapPiece(std::uint64_t index) { pieces_.erase(index); }
   // The session so far: camera, keyframes, edges and places (no kept keyframes: no images).
