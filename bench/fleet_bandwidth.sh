@@ -27,34 +27,14 @@ for binary in "$node" "$tum2bag" "$rgbdmap"; do
   [ -x "$binary" ] || { echo "fleet_bandwidth.sh: $binary not found; build first" >&2; exit 1; }
 done
 
-work=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null; done
-  wait 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
+source "$root/bench/ros_bench_common.sh"
 if [ -z "$tum" ]; then
   tum="$work/walk"
   "$rgbdmap" synth --room 8x6x3 --path walk --frames 360 --seed 1 --out "$tum" >"$work/synth.log" 2>&1 ||
     { cat "$work/synth.log"; exit 1; }
 fi
-"$tum2bag" "$tum" "$work/camera.bag" >"$work/tum2bag.log" 2>&1 ||
-  { cat "$work/tum2bag.log"; exit 1; }
-port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_IP=127.0.0.1 ROS_HOME="$work/ros"
-roscore -p "$port" >"$work/roscore.log" 2>&1 &
-pids+=($!)
-wait_for() {  # wait_for SECONDS COMMAND...: until the command succeeds
-  local deadline=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ "$SECONDS" -lt "$deadline" ] || return 1
-    sleep 0.2
-  done
-}
-wait_for 30 rostopic list >/dev/null 2>&1 || { cat "$work/roscore.log"; exit 1; }
+write_bag "$tum" "$work/camera.bag"
+start_roscore
 
 log="$work/node.log"
 "$node" "_out:=$work/map.pcd" >"$log" 2>&1 &

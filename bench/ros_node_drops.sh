@@ -27,30 +27,9 @@ for binary in "$node" "$tum2bag"; do
   [ -x "$binary" ] || { echo "ros_node_drops.sh: $binary not found; build first" >&2; exit 1; }
 done
 
-work=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null; done
-  wait 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_IP=127.0.0.1 ROS_HOME="$work/ros"
-"$tum2bag" "$tum" "$work/camera.bag" >"$work/tum2bag.log" 2>&1 ||
-  { cat "$work/tum2bag.log"; exit 1; }
-roscore -p "$port" >"$work/roscore.log" 2>&1 &
-pids+=($!)
-# Waits up to $1 seconds for the command after it to succeed.
-wait_for() {
-  local deadline=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ "$SECONDS" -lt "$deadline" ] || return 1
-    sleep 0.2
-  done
-}
-wait_for 30 rostopic list >/dev/null 2>&1 || { cat "$work/roscore.log"; exit 1; }
+source "$root/bench/ros_bench_common.sh"
+write_bag "$tum" "$work/camera.bag"
+start_roscore
 
 for run in $(seq "$runs"); do
   log="$work/node-$run.log"

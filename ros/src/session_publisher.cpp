@@ -93,13 +93,7 @@ void SessionPublisher::addKeyframe(const Frame& keyframe) {
       copy = std::move(spare_.back());
       spare_.pop_back();
     }
-    keyframe.depth.copyTo(copy.depth);
-    keyframe.color.copyTo(copy.color);
-    copy.index = keyframe.index;
-    copy.timestamp = keyframe.timestamp;
-    copy.has_pose = keyframe.has_pose;
-    copy.pose = keyframe.pose;
-    copy.anchor = keyframe.anchor;
+    copyFrame(keyframe, copy);
     incoming_.push_back(std::move(copy));
   }
   wake_.notify_all();

@@ -4,25 +4,6 @@
 #include <exception>
 
 namespace rgbdmap {
-namespace {
-
-// Same-size images are copied in place and the origin fits the reserved capacity: no allocation.
-void copyFrame(const Frame& from, Frame& to) {
-  to.index = from.index;
-  to.timestamp = from.timestamp;
-  from.depth.copyTo(to.depth);
-  from.color.copyTo(to.color);
-  to.has_pose = from.has_pose;
-  to.pose = from.pose;
-  to.anchor = from.anchor;
-  to.has_up = from.has_up;
-  to.up = from.up;
-  to.origin.assign(from.origin);
-  to.captured_at = from.captured_at;
-}
-
-}  // namespace
-
 FusionThread::FusionThread(Mapper& mapper, std::size_t slots, int width, int height,
                            ErrorHandler on_error)
     : mapper_(mapper),

@@ -42,4 +42,20 @@ struct Frame {
   double captured_at = 0.0;  // steady-clock seconds when the capture thread queued it
 };
 
+// `from` into `to`: same-size images are copied in place and an origin that fits the reserved
+// capacity is too (no allocation: frames are reused).
+inline void copyFrame(const Frame& from, Frame& to) {
+  to.index = from.index;
+  to.timestamp = from.timestamp;
+  from.depth.copyTo(to.depth);
+  from.color.copyTo(to.color);
+  to.has_pose = from.has_pose;
+  to.pose = from.pose;
+  to.anchor = from.anchor;
+  to.has_up = from.has_up;
+  to.up = from.up;
+  to.origin.assign(from.origin);
+  to.captured_at = from.captured_at;
+}
+
 }  // namespace rgbdmap
