@@ -171,7 +171,6 @@ int runMerger() {
   config.loadPreset(s.config);
   if (s.voxel > 0) config.map.voxel_size = s.voxel;
   FleetMerger merger(s.robots, config);
-  const bool resumed = resumeFrom(merger, s, pnh);
   Arrivals arrived;
 
   std::atomic<bool> resend_wanted[64];
@@ -205,6 +204,9 @@ int runMerger() {
             report(merger.robots());
             return true;
           });
+  // After the topics and the service are set up with the master (a Ctrl-C while roscpp still
+  // talks to it left the merger retrying for ever), before the callbacks run.
+  const bool resumed = resumeFrom(merger, s, pnh);
   ros::AsyncSpinner spinner(2);
   spinner.start();
   spdlog::info(

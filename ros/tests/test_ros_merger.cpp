@@ -101,8 +101,12 @@ TEST_F(RosMerger, TwoRobotsBecomeOneMapARobotElsewhereIsReportedAKilledOnesPartS
   Process again(
       {mergerBinary(), "_robots:=robot1 robot2 robot3", "_out:=" + dir_ + "/restarted.pcd"},
       dir_ + "/restarted.log");
+  // (Its start-up line comes once it is up: then it is stopped.)
   ASSERT_TRUE(waitUntil(
-      [&] { return readFile(dir_ + "/restarted.log").find("picked up from") != std::string::npos; },
+      [&] {
+        return readFile(dir_ + "/restarted.log").find("publishing /merged/map") !=
+               std::string::npos;
+      },
       60))
       << readFile(dir_ + "/restarted.log");
   EXPECT_NE(readFile(dir_ + "/restarted.log").find("3 of its 3 runs"), std::string::npos)
