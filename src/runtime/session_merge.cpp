@@ -271,15 +271,6 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
       for (const Match& m : *links) ++by_owner[owner[static_cast<std::size_t>(m.target)]];
       const std::size_t offset = merged.graph.keyframes.size();
       append(merged, owner, static_cast<int>(i), sessions[i], *links);
-      // The frame the optimised graph settled on: the session's keyframes, fitted rigidly.
-      const std::size_t count = sessions[i].graph.keyframes.size();
-      Eigen::Matrix3Xd before(3, count), after(3, count);
-      for (std::size_t k = 0; k < count; ++k) {
-        before.col(static_cast<Eigen::Index>(k)) =
-            sessions[i].graph.keyframes[k].pose.translation();
-        after.col(static_cast<Eigen::Index>(k)) =
-            merged.graph.keyframes[offset + k].pose.translation();
-      }
       Placement& p = placements[i];
       p.placed = true;
       p.first_keyframe = offset;
@@ -288,8 +279,7 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
           std::max_element(by_owner.begin(), by_owner.end(), [](const auto& a, const auto& b) {
             return a.second < b.second;
           })->first;
-      p.transform = links->front().transform;
-      if (count >= 3) p.transform.matrix() = Eigen::umeyama(before, after, false);
+      p.transform = links->front().transform;  // (fitted below once the graph of all settles)
       progress = true;
     }
   }
