@@ -3,8 +3,9 @@
 # (e.g. `rgbdmap synth -o walk --path walk --room 8x6x2.8 --frames 18000 --loop-seconds 20`:
 # 30 laps of 600 frames) and samples the process's RSS every second against the frames read
 # (from the status line, logged every 5 s); prints, per lap, the highest RSS seen in it and its
-# growth since lap 2, the median RSS of the lap and its growth, and the map's and the place database's memory at the lap's last status
-# line, then the run's stats (peak RSS, map and kept-keyframe memory, re-fusions).
+# growth since lap 2, the median and the lowest RSS of the lap and their growth (a checkpoint or
+# a pass's end decides the highest; the lowest is the footprint between them), and the map's and
+# the place database's memory at the lap's last status line, then the run's stats (peak RSS, map and kept-keyframe memory, re-fusions).
 #
 #   bash bench/laps.sh SEQUENCE FRAMES_PER_LAP [--build build] [-- extra rgbdmap args]
 # e.g. bash bench/laps.sh /tmp/walk 600 -- --rate 1     (or --rate max)
@@ -40,6 +41,7 @@ wait "$pid" || { echo "laps.sh: rgbdmap failed, see $out/log.txt" >&2; exit 1; }
 awk -v lap="$lap" '
   {
     l = int($1 / lap) + 1; if ($2 > peak[l]) peak[l] = $2; if (l > laps) laps = l
+    if (!(l in low) || $2 < low[l]) low[l] = $2
     n[l]++; rss[l, n[l]] = $2; map[l] = $3; places[l] = $4
   }
   function median(l,    i, j, t, c, v) {
@@ -48,15 +50,16 @@ awk -v lap="$lap" '
     return v[int((c + 1) / 2)]
   }
   END {
-    print "| lap | highest RSS MB | growth since lap 2 MB | median RSS MB | growth since lap 2 MB | map MB | places MB |"
-    print "| --- | --- | --- | --- | --- | --- | --- |"
+    print "| lap | highest RSS MB | growth since lap 2 MB | median RSS MB | growth since lap 2 MB | lowest RSS MB | growth since lap 2 MB | map MB | places MB |"
+    print "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     if (2 in peak) median2 = median(2)
     for (l = 1; l <= laps; ++l)
       if (l in peak) {
         m = median(l)
-        printf "| %d | %.0f | %s | %.0f | %s | %s | %s |\n", l, peak[l] / 1024,
+        printf "| %d | %.0f | %s | %.0f | %s | %.0f | %s | %s | %s |\n", l, peak[l] / 1024,
           (l >= 2 && 2 in peak) ? sprintf("%+.0f", (peak[l] - peak[2]) / 1024) : "", m / 1024,
-          (l >= 2 && 2 in peak) ? sprintf("%+.0f", (m - median2) / 1024) : "", map[l], places[l]
+          (l >= 2 && 2 in peak) ? sprintf("%+.0f", (m - median2) / 1024) : "", low[l] / 1024,
+          (l >= 2 && 2 in peak) ? sprintf("%+.0f", (low[l] - low[2]) / 1024) : "", map[l], places[l]
       }
   }' "$out/samples.txt"
 grep -o '"peak_rss_mb": [0-9.]*\|"map_memory_mb": [0-9.]*\|"kept_keyframes_mb": [0-9.]*\|"place_database_mb": [0-9.]*\|"map_refusions": [0-9]*\|"keyframes": [0-9]*\|"loops_accepted": [0-9]*\|"frames_dropped": [0-9]*' "$out/stats.json" | tr '\n' ' '

@@ -1,7 +1,9 @@
 // The TSDF voxel map and its projective integration on images of exact planes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <set>
 
@@ -158,6 +160,83 @@ TEST(VoxelMap, MissingDepthAllocatesNothing) {
   integratorFor(c).integrate(depth, grey(c), Eigen::Isometry3d::Identity(), map);
   EXPECT_EQ(map.blockCount(), 0u);
   EXPECT_EQ(map.pointCount(), 0u);
+}
+
+// Idle blocks away from every surface go: free space in front of it, and the far side of a wall
+// that a distant view's wide band (7.8 cm at 4 m) reached. Every point of the surface stays, and a
+// view measuring there again allocates what it needs anew.
+TEST(VoxelMap, IdleBlocksInFrontOfOrBehindASurfaceGoAndTheSurfaceStays) {
+  const CameraIntrinsics c = smallCamera();
+  const double distance = 4.0;
+  const double sigma = 0.0012 + 0.0019 * (distance - 0.4) * (distance - 0.4);
+  VoxelMap map(0.01);
+  TsdfIntegrator tsdf = integratorFor(c);
+  for (unsigned frame = 1; frame <= 6; ++frame)
+    tsdf.integrate(planeDepth(c, distance, 0.2, sigma, frame), grey(c),
+                   Eigen::Isometry3d::Identity(), map);
+  const MapCloud before = extractOf(map);
+  const std::size_t blocks = map.blockCount();
+  std::size_t behind = 0;  // blocks whose every observed voxel is 2 voxels or more behind
+  for (std::uint32_t i = 0; i < map.blockSlots(); ++i) {
+    const VoxelMap::Block& b = map.block(i);
+    if (std::all_of(b.voxels.begin(), b.voxels.end(),
+                    [](const VoxelMap::Voxel& v) { return !v.observed() || v.sdf() <= -0.02f; }))
+      ++behind;
+  }
+  ASSERT_GT(behind, 0u);
+  // Not idle yet: nothing goes.
+  EXPECT_EQ(map.pruneAwayFromSurfaces(10, 0.02f), 0u);
+  for (int i = 0; i < 12; ++i) {  // views elsewhere
+    map.beginIntegration();
+    map.finishIntegration();
+  }
+  const std::size_t freed = map.pruneAwayFromSurfaces(10, 0.02f);
+  std::cout << freed << " of " << blocks << " blocks freed, " << behind << " of them behind\n";
+  EXPECT_GE(freed, behind);
+  EXPECT_EQ(map.blockCount(), blocks - freed);
+  // Every point stays. A point next to a freed block is moved onto the zero level along a
+  // one-sided gradient instead of a central one: by a fraction of a voxel.
+  const MapCloud after = extractOf(map);
+  ASSERT_EQ(after.size(), before.size());
+  std::size_t moved = 0;
+  float farthest = 0.0f;
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    const float d = (after[i].getVector3fMap() - before[i].getVector3fMap()).norm();
+    if (d > 0.0f) ++moved;
+    farthest = std::max(farthest, d);
+  }
+  std::cout << moved << " of " << after.size() << " points moved, by at most " << farthest * 1000
+            << " mm\n";
+  EXPECT_LT(moved, after.size() / 10);
+  EXPECT_LT(farthest, 0.005f);
+  EXPECT_EQ(map.pointCount(), after.size());
+}
+
+// A map emptied for a re-fusion pass fuses exactly as a new one does, in the memory it had; what
+// a smaller map no longer needs is handed back.
+TEST(VoxelMap, AClearedMapFusesAsANewOneInTheMemoryItHad) {
+  const CameraIntrinsics c = smallCamera();
+  TsdfIntegrator tsdf = integratorFor(c);
+  VoxelMap reused(0.01), fresh(0.01);
+  for (unsigned frame = 1; frame <= 3; ++frame)
+    tsdf.integrate(planeDepth(c, 3.0, 0.4, 0.01, frame), grey(c), Eigen::Isometry3d::Identity(),
+                   reused);
+  const std::size_t memory = reused.memoryBytes();
+  reused.clear();
+  EXPECT_EQ(reused.blockCount(), 0u);
+  EXPECT_EQ(reused.pointCount(), 0u);
+  EXPECT_EQ(reused.memoryBytes(), memory);
+  const cv::Mat near = planeDepth(c, 1.0, 0.0, 0.0, 0);
+  tsdf.integrate(near, grey(c), Eigen::Isometry3d::Identity(), reused);
+  tsdf.integrate(near, grey(c), Eigen::Isometry3d::Identity(), fresh);
+  const MapCloud a = extractOf(reused), b = extractOf(fresh);
+  ASSERT_GT(a.size(), 1000u);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+    EXPECT_EQ(a[i].getVector3fMap(), b[i].getVector3fMap());
+  EXPECT_EQ(reused.blockCount(), fresh.blockCount());
+  reused.releaseUnused();
+  EXPECT_LT(reused.memoryBytes(), memory);
 }
 
 }  // namespace

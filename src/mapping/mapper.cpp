@@ -13,9 +13,10 @@ namespace {
 // the status line, and counting revisits every block changed since the last count (every 10th
 // keyframe cost 8% of an every-frame replay's CPU). A snapshot gives the exact count.
 constexpr std::chrono::milliseconds kCountPointsEvery{1000};
-// Blocks far from any surface are freed every this many keyframes, once no keyframe has updated
+// Blocks away from any surface are freed every this many keyframes, once no keyframe has updated
 // them for kPruneIdleKeyframes (blocks in view are updated again and again: freeing them would
-// only allocate them anew) and every voxel is at least kPruneClearanceVoxels in front of a surface.
+// only allocate them anew) and every voxel is at least kPruneClearanceVoxels in front of a surface
+// (free space) or behind one (what a wide band of a far or noisy view reached).
 constexpr std::uint64_t kPruneEvery = 10;
 constexpr std::uint64_t kPruneIdleKeyframes = 30;
 constexpr float kPruneClearanceVoxels = 2.0f;
@@ -45,8 +46,8 @@ void Mapper::integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, Vox
   integrator_.integrate(keyframe, pose, map, stats_);
   const std::uint64_t integrations = map.integrations();
   if (integrations % kPruneEvery == 0)
-    map.pruneFreeSpace(kPruneIdleKeyframes,
-                       kPruneClearanceVoxels * static_cast<float>(voxel_size_));
+    map.pruneAwayFromSurfaces(kPruneIdleKeyframes,
+                              kPruneClearanceVoxels * static_cast<float>(voxel_size_));
 }
 
 void Mapper::fuse(const Frame& keyframe) {
@@ -137,14 +138,16 @@ bool Mapper::refine(int keyframes) {
     const PoseCorrections::Snapshot latest = corrections_->snapshot();
     if (!joinSaved(latest) && !lagsCorrections(latest)) return false;
     // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
-    // while the pass fuses a new one in its place.
-    auto cloud = std::make_shared<MapCloud>();
+    // while the pass fuses a new one in its place. The cloud is packed (16 bytes a point): it is
+    // kept to the pass's end, when the new TSDF is whole beside it.
+    auto cloud = std::make_shared<PackedMapCloud>();
     map_.pointCount(&integrator_.pool());  // an exact count: the cloud is reserved to fit
     map_.extract(*cloud);
     stats_.map_points.store(cloud->size());
     if (keep_meshes_) shown_mesh_ = std::make_shared<const TriangleMesh>(extractMesh(map_));
     shown_ = std::move(cloud);
-    map_ = VoxelMap(voxel_size_, min_observations_);
+    // Emptied, not freed: the pass fuses about as many blocks again into the same memory.
+    map_.clear();
     refused_at_.clear();
   }
   const auto start = std::chrono::steady_clock::now();
@@ -163,6 +166,7 @@ bool Mapper::refine(int keyframes) {
     // within the budget are not in it), and is shown again.
     shown_.reset();
     shown_mesh_.reset();
+    map_.releaseUnused();
     for (std::size_t i = 0; i < refused_at_.size(); ++i) store_[i].fused_at = refused_at_[i];
     stats_.map_refusions.fetch_add(1);
     next_count_ = {};
@@ -188,13 +192,13 @@ std::size_t Mapper::memoryBytes() const {
   std::size_t saved = 0;
   for (const KeyframeStore::Entry& e : saved_) saved += e.imageBytes();
   return map_.memoryBytes() + store_.memoryBytes() + saved +
-         (shown_ ? shown_->size() * sizeof(MapCloud::PointType) : 0) +
+         (shown_ ? shown_->capacity() * sizeof(PackedMapPoint) : 0) +
          (shown_mesh_ ? shown_mesh_->memoryBytes() : 0) +
          (free_space_ ? free_space_->memoryBytes() : 0);
 }
 
 std::shared_ptr<const MapCloud> Mapper::snapshot() const {
-  if (refusing()) return shown_;
+  if (refusing()) return std::make_shared<const MapCloud>(toMapCloud(*shown_));
   auto cloud = std::make_shared<MapCloud>();
   map_.extract(*cloud);
   stats_.map_points.store(cloud->size());  // what is written

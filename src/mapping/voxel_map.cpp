@@ -100,15 +100,30 @@ void VoxelMap::touchExisting(std::uint32_t index) {
   }
 }
 
-std::size_t VoxelMap::pruneFreeSpace(std::uint64_t idle, float clearance) {
+void VoxelMap::clear() {
+  blocks_.clear();
+  block_index_.clear();
+  coordinates_.clear();
+  free_.clear();
+  touched_.clear();
+  count_due_.clear();
+  points_ = 0;
+  integration_ = 0;
+}
+
+std::size_t VoxelMap::pruneAwayFromSurfaces(std::uint64_t idle, float clearance) {
   std::size_t freed = 0;
   for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
     if (!b.in_use || b.touched_in + idle >= integration_) continue;
-    const bool free_space = std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
+    const bool in_front = std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
       return !v.observed() || v.sdf() >= clearance;
     });
-    if (!free_space) continue;
+    const bool behind =
+        !in_front && std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
+          return !v.observed() || v.sdf() <= -clearance;
+        });
+    if (!in_front && !behind) continue;
     std::uint64_t key;
     packKey(coordinates_[i], key);
     block_index_.erase(key);
@@ -244,28 +259,46 @@ std::size_t VoxelMap::pointCount(WorkerPool* pool) {
   return points_;
 }
 
-void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
-  cloud.clear();
-  // The last count and some room: the map may have grown since, and a vector that outgrows its
-  // reserve holds old and new arrays at once (a map's worth of points 1.5 times over).
-  cloud.reserve(points_ + points_ / 16 + kBlockVoxels);
+template <typename Emit>
+void VoxelMap::forEachPoint(Emit&& emit) const {
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     const Block& b = blocks_[i];
     if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
-    forEachSurfaceVoxel(b, neighboursOf(b), [&](const Eigen::Vector3f& p, const Voxel& v) {
-      pcl::PointXYZRGB point;
-      point.x = p.x();
-      point.y = p.y();
-      point.z = p.z();
-      point.r = v.r;
-      point.g = v.g;
-      point.b = v.b;
-      cloud.push_back(point);
-    });
+    forEachSurfaceVoxel(b, neighboursOf(b), emit);
   }
+}
+
+void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
+  cloud.clear();
+  cloud.reserve(pointsToReserve());
+  forEachPoint([&](const Eigen::Vector3f& p, const Voxel& v) {
+    pcl::PointXYZRGB point;
+    point.x = p.x();
+    point.y = p.y();
+    point.z = p.z();
+    point.r = v.r;
+    point.g = v.g;
+    point.b = v.b;
+    cloud.push_back(point);
+  });
   cloud.width = static_cast<std::uint32_t>(cloud.size());
   cloud.height = 1;
   cloud.is_dense = true;
+}
+
+void VoxelMap::extract(std::vector<PackedMapPoint>& points) const {
+  points.clear();
+  points.reserve(pointsToReserve());
+  forEachPoint([&](const Eigen::Vector3f& p, const Voxel& v) {
+    PackedMapPoint point;
+    point.x = p.x();
+    point.y = p.y();
+    point.z = p.z();
+    point.r = v.r;
+    point.g = v.g;
+    point.b = v.b;
+    points.push_back(point);
+  });
 }
 
 }  // namespace rgbdmap

@@ -243,13 +243,16 @@ void CheckpointWriter::run() {
                       " points) is still complete at " + path;
     else
       result.error += "; no complete map has been written to " + path + " yet";
+    if (!grid.path.empty()) writeGrid(*cloud, grid, result);
+    if (octomap.free_space) writeOctomap(*cloud, octomap, result);
+    // The snapshot (18 MB for a room) goes before the rest is written: the session alone takes
+    // longer than the map, and the writer would otherwise hold both for all of it.
+    cloud.reset();
     for (const TrajectoryFile& t : trajectories) {
       std::string error;
       if (!t->persist(error)) addFailure(result, error);
     }
     if (mesh.mesh) writeMesh(mesh, result);
-    if (!grid.path.empty()) writeGrid(*cloud, grid, result);
-    if (octomap.free_space) writeOctomap(*cloud, octomap, result);
     if (session.session) writeSessionFile(session, result);
     result.seconds = secondsSince(start);
     (result.ok ? written_ : failed_).fetch_add(1);

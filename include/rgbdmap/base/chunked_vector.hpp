@@ -38,6 +38,12 @@ class ChunkedVector {
   T& operator[](std::size_t i) { return chunks_[i / kChunk][i % kChunk]; }
   const T& operator[](std::size_t i) const { return chunks_[i / kChunk][i % kChunk]; }
 
+  // Empty, its chunks kept for the elements added next: a map fused again from scratch reuses
+  // the memory it had instead of handing it back and faulting it in again.
+  void clear() { size_ = 0; }
+  // Hands back the chunks no element is in.
+  void releaseUnused() { chunks_.resize(std::min(chunks_.size(), (size_ + kChunk - 1) / kChunk)); }
+
   // A default-constructed element at the end.
   T& emplace_back() {
     if (size_ == capacity()) chunks_.push_back(std::make_unique<T[]>(kChunk));

@@ -29,8 +29,9 @@ namespace rgbdmap {
 // kept keyframes at their corrected poses, a few keyframes at a time between new ones (refine()).
 // So the map written is what fusing the keyframes at the poses known then gives: one surface per
 // wall, not one per visit. While a pass runs, what is shown and written is the map as it was when
-// the pass began, kept as its point cloud (and mesh): the TSDF it came from is freed, so a pass
-// never holds two TSDFs, and keyframes that arrive meanwhile are fused once, by the pass.
+// the pass began, kept as its point cloud (and mesh): the TSDF it came from is emptied and the pass
+// fuses into its memory, so a pass never holds two TSDFs (nor hands 100 MB back to the system to
+// fault it in again), and keyframes that arrive meanwhile are fused once, by the pass.
 class Mapper {
  public:
   // `keyframe_trajectory` (may be null: then the Mapper keeps it, see keyframeTrajectory()) is
@@ -65,7 +66,7 @@ class Mapper {
   }
 
   // The map as a point cloud (what a checkpoint writes): one extracted now, or while a pass runs
-  // the one it began from.
+  // the one it began from (kept packed, unpacked for each call).
   std::shared_ptr<const MapCloud> snapshot() const;
   // The map as a triangle mesh (marching cubes on the TSDF, see extractMesh()); while a pass runs,
   // the one it began from (when keepMeshes(), else the pass's own so far).
@@ -106,7 +107,7 @@ class Mapper {
   KeyframeStore store_;
   // While a pass runs: the map it began from (what is shown), and the poses the first
   // refused_at_.size() kept keyframes were re-fused at (into map_).
-  std::shared_ptr<const MapCloud> shown_;
+  std::shared_ptr<const PackedMapCloud> shown_;
   std::shared_ptr<const TriangleMesh> shown_mesh_;
   bool keep_meshes_ = false;
   std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> refused_at_;

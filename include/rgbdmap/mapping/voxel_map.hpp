@@ -12,6 +12,7 @@
 
 #include "rgbdmap/base/chunked_vector.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
+#include "rgbdmap/mapping/map_cloud.hpp"
 
 namespace rgbdmap {
 
@@ -102,6 +103,8 @@ class VoxelMap {
   // One coloured point per surface voxel, in a deterministic order (blocks in the order they
   // were created).
   void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const;
+  // The same points, packed (PackedMapCloud: half the memory).
+  void extract(std::vector<PackedMapPoint>& points) const;
 
   // --- for the integrator ---
   // Starts an integration: blocks allocated or fetched with touchBlock() until
@@ -119,9 +122,16 @@ class VoxelMap {
   const std::vector<Eigen::Vector3i>& blockCoordinates() const { return coordinates_; }
   static const Eigen::Vector3i kNoBlock;
   // Frees the blocks far from any surface: not updated in the last `idle` integrations, and every
-  // observed voxel at least `clearance` in front of a surface. What they held is free space, and
-  // a later view that measures near them allocates them again. Returns how many were freed.
-  std::size_t pruneFreeSpace(std::uint64_t idle, float clearance);
+  // observed voxel at least `clearance` in front of a surface, or every one at least `clearance`
+  // behind one. What they held is free space, or the far side of a surface that a noisy or
+  // distant view's band reached (no zero crossing is in or next to them); a later view that
+  // measures near them allocates them again. Returns how many were freed.
+  std::size_t pruneAwayFromSurfaces(std::uint64_t idle, float clearance);
+  // Empty again (as a new map), keeping the blocks' memory for the blocks fused next: a re-fusion
+  // pass (Mapper) starts from an empty map and grows back to about the size it had.
+  void clear();
+  // Hands back the memory of blocks no longer needed after clear() (a map that grew back smaller).
+  void releaseUnused() { blocks_.releaseUnused(); }
   Block& block(std::uint32_t index) { return blocks_[index]; }
   const Block& block(std::uint32_t index) const { return blocks_[index]; }
   // Marks the working set and the blocks next to it (whose border voxels may have changed
@@ -142,6 +152,13 @@ class VoxelMap {
   // Calls emit(position, voxel) for each surface voxel of the block, in voxel order.
   template <typename Emit>
   void forEachSurfaceVoxel(const Block& block, const Neighbours& neighbours, Emit&& emit) const;
+  // Calls emit(position, voxel) for every point extract() writes, in its order.
+  template <typename Emit>
+  void forEachPoint(Emit&& emit) const;
+  // Room for the points of the last count and some: the map may have grown since, and a vector
+  // that outgrows its reserve holds old and new arrays at once (a map's worth of points 1.5 times
+  // over).
+  std::size_t pointsToReserve() const { return points_ + points_ / 16 + kBlockVoxels; }
 
   double voxel_size_;
   std::uint32_t min_observations_;
