@@ -21,6 +21,19 @@ bool packKey(const Eigen::Vector3i& coords, std::uint64_t& key) {
   return true;
 }
 
+// A surface voxel's point, for either point type (pcl::PointXYZRGB or PackedMapPoint).
+template <typename Point>
+Point surfacePoint(const Eigen::Vector3f& p, const VoxelMap::Voxel& v) {
+  Point point;
+  point.x = p.x();
+  point.y = p.y();
+  point.z = p.z();
+  point.r = v.r;
+  point.g = v.g;
+  point.b = v.b;
+  return point;
+}
+
 }  // namespace
 
 const Eigen::Vector3i VoxelMap::kNoBlock(INT32_MIN, INT32_MIN, INT32_MIN);
@@ -272,14 +285,7 @@ void VoxelMap::extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const {
   cloud.clear();
   cloud.reserve(pointsToReserve());
   forEachPoint([&](const Eigen::Vector3f& p, const Voxel& v) {
-    pcl::PointXYZRGB point;
-    point.x = p.x();
-    point.y = p.y();
-    point.z = p.z();
-    point.r = v.r;
-    point.g = v.g;
-    point.b = v.b;
-    cloud.push_back(point);
+    cloud.push_back(surfacePoint<pcl::PointXYZRGB>(p, v));
   });
   cloud.width = static_cast<std::uint32_t>(cloud.size());
   cloud.height = 1;
@@ -290,14 +296,7 @@ void VoxelMap::extract(std::vector<PackedMapPoint>& points) const {
   points.clear();
   points.reserve(pointsToReserve());
   forEachPoint([&](const Eigen::Vector3f& p, const Voxel& v) {
-    PackedMapPoint point;
-    point.x = p.x();
-    point.y = p.y();
-    point.z = p.z();
-    point.r = v.r;
-    point.g = v.g;
-    point.b = v.b;
-    points.push_back(point);
+    points.push_back(surfacePoint<PackedMapPoint>(p, v));
   });
 }
 
