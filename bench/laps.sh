@@ -5,7 +5,8 @@
 # (from the status line, logged every 5 s); prints, per lap, the highest RSS seen in it and its
 # growth since lap 2, the median and the lowest RSS of the lap and their growth (a checkpoint or
 # a pass's end decides the highest; the lowest is the footprint between them), and the map's and
-# the place database's memory at the lap's last status line, then the run's stats (peak RSS, map and kept-keyframe memory, re-fusions).
+# the place database's memory at the lap's last status line, then the run's stats (peak RSS, map
+# and kept-keyframe memory, re-fusions).
 #
 #   bash bench/laps.sh SEQUENCE FRAMES_PER_LAP [--build build] [-- extra rgbdmap args]
 # e.g. bash bench/laps.sh /tmp/walk 600 -- --rate 1     (or --rate max)

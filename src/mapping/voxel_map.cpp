@@ -129,14 +129,13 @@ std::size_t VoxelMap::pruneAwayFromSurfaces(std::uint64_t idle, float clearance)
   for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
     if (!b.in_use || b.touched_in + idle >= integration_) continue;
-    const bool in_front = std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
-      return !v.observed() || v.sdf() >= clearance;
-    });
-    const bool behind =
-        !in_front && std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
-          return !v.observed() || v.sdf() <= -clearance;
-        });
-    if (!in_front && !behind) continue;
+    // Every observed voxel at least `clearance` on one side: in front (+1) or behind (-1).
+    const auto all_beyond = [&](float side) {
+      return std::all_of(b.voxels.begin(), b.voxels.end(), [&](const Voxel& v) {
+        return !v.observed() || side * v.sdf() >= clearance;
+      });
+    };
+    if (!all_beyond(1.0f) && !all_beyond(-1.0f)) continue;
     std::uint64_t key;
     packKey(coordinates_[i], key);
     block_index_.erase(key);
