@@ -1,7 +1,8 @@
 // rgbdmap_node: the rgbdmap pipeline as a ROS node. Subscribes to a camera's colour, depth and
 // camera_info topics, publishes ~map, ~pose and TF, serves ~save_map and ~snapshot, and takes
 // every config key as a private parameter. Signals, checkpoints and the exit are the CLI's:
-// SIGUSR1 writes the map, SIGINT/SIGTERM stop with a final save (exit 0), a second SIGINT quits.
+// SIGUSR1 writes the map, SIGINT/SIGTERM stop with a final save (exit 0), a second SIGINT more
+// than RunSignals::kSameInterrupt after the first quits.
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <spdlog/spdlog.h>

@@ -15,9 +15,11 @@
 #include <csignal>
 #include <filesystem>
 #include <mutex>
+#include <thread>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/session_stream.hpp"
 #include "ros_test_support.hpp"
@@ -482,7 +484,13 @@ TEST_F(RosNode, SecondSigintWhileWritingLeavesNoTemporaryFile) {
 
   StalledWrite map(dir_ + "/map.pcd.tmp-" + std::to_string(node.pid()));
   node.signal(SIGINT);
+  ASSERT_TRUE(waitUntil(
+      [&] { return readFile(node_log).find("SIGINT: stopping") != std::string::npos; }, 120))
+      << readFile(node_log);
   ASSERT_TRUE(waitUntil([&] { return map.begun(); }, 120)) << readFile(node_log);
+  // A second after the first was taken (its line was logged): a person's second Ctrl-C, not one
+  // interrupt delivered twice (RunSignals::kSameInterrupt), whatever the machine's speed.
+  std::this_thread::sleep_for(2 * RunSignals::kSameInterrupt);
   ASSERT_TRUE(node.running());
   node.signal(SIGINT);
   EXPECT_EQ(node.wait(60), 130) << readFile(node_log);

@@ -65,6 +65,7 @@ void RunSignals::wait() {
 }
 
 void RunSignals::handle(int sig) {
+  const auto now = std::chrono::steady_clock::now();  // before the lock: when the signal came
   std::lock_guard<std::mutex> lock(mutex_);
   if (sig == SIGUSR1) {
     if (!started_) {
@@ -78,6 +79,13 @@ void RunSignals::handle(int sig) {
     return;
   }
   const char* name = sig == SIGINT ? "SIGINT" : "SIGTERM";
+  if (first_stop_ && now - *first_stop_ <= kSameInterrupt) {
+    const std::chrono::duration<double, std::milli> after = now - *first_stop_;
+    spdlog::info("{} again {:.1f} ms after the first: the same interrupt, delivered twice", name,
+                 after.count());
+    return;
+  }
+  if (!first_stop_) first_stop_ = now;
   if (control_.stop.exchange(true) && sig == SIGINT) {
     // The writers may be in the middle of a temporary file: none is left behind, and the
     // destinations keep their last complete write.

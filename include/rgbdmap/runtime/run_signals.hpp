@@ -1,7 +1,9 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -17,10 +19,22 @@ namespace rgbdmap {
 //   write yet: a no-op.
 // - SIGINT or SIGTERM: stop (RunControl::stop). Before the run starts, it does not start and
 //   writes nothing; after, it stops as the run says (mapping drains and saves).
-// - A second SIGINT: removes the temporary files the run may have on disk and quits at once
-//   (exit 130). Each destination keeps its last complete write; none is half-written.
+// - A second SIGINT, more than kSameInterrupt after the first SIGINT or SIGTERM: removes the
+//   temporary files the run may have on disk and quits at once (exit 130). Each destination keeps
+//   its last complete write; none is half-written.
+// - SIGINT or SIGTERM again within kSameInterrupt of the first: the same interrupt, delivered
+//   twice. `timeout -s INT` (unless --foreground) and supervisors signal the process and then its
+//   process group, the process included; taken as a second Ctrl-C, that lost the final save.
 class RunSignals {
  public:
+  // How long after the first stop signal another one is still the same interrupt. Delivery to a
+  // process and then to its group is a few system calls in a row: microseconds apart, a few
+  // milliseconds if the sender is preempted between them on a loaded machine. A person's second
+  // Ctrl-C, meant to quit, comes after seeing the "stopping" line: a bare visual reaction takes
+  // 0.2-0.3 s, reading and deciding longer. 0.5 s is a hundred times the slowest delivery and
+  // longer than any such reaction; a quicker double press counts once, the next press quits.
+  static constexpr std::chrono::milliseconds kSameInterrupt{500};
+
   // What a run tells the signal thread when it starts.
   struct Run {
     std::vector<std::string> temporary_files;  // removed by a second SIGINT
@@ -56,6 +70,9 @@ class RunSignals {
   std::mutex mutex_;  // orders runStarts() and the handling of a signal
   Run run_;
   bool started_ = false;
+  // When the first SIGINT or SIGTERM came, on the monotonic clock (a wall-clock step must not
+  // join two interrupts or split one).
+  std::optional<std::chrono::steady_clock::time_point> first_stop_;
   std::atomic<bool> done_{false};
   std::thread thread_;
 };
