@@ -200,10 +200,18 @@ TourPath::TourPath(const FloorPlan& plan, std::uint64_t seed, double speed, doub
   std::stable_sort(rooms.begin(), rooms.end(), [&](const PlanRoom* a, const PlanRoom* b) {
     return direction * a->door.x() < direction * b->door.x();
   });
+  // Walking the corridor straight ahead would see its walls only at grazing angles (59 to 78
+  // degrees from their normal), where the sensor measures them worst and the map keeps least of
+  // them; so the camera looks ahead and to one side, towards the next door on the way out and to
+  // each side in turn on the way back.
+  const double glance = 0.6;  // rad
+  auto looking = [&](double heading, double side) {
+    return nearestAngle(yaw_, heading + side * direction * glance);
+  };
   for (const PlanRoom* room : rooms) {
     const Eigen::Vector2d outside(room->door.x(), from.y());
     const double side = room->door.y() > from.y() ? 1.0 : -1.0;
-    go(outside, yaw_);
+    go(outside, looking(ahead, side));
     const double in = nearestAngle(yaw_, side * 0.5 * M_PI);
     go(outside, in);
     // Through the door straight; to a stop off the door's axis only once past the door.
@@ -227,12 +235,15 @@ TourPath::TourPath(const FloorPlan& plan, std::uint64_t seed, double speed, doub
     go(way.back().at, in + M_PI);
     for (std::size_t k = way.size() - 1; k-- > 0;) go(way[k].at, yaw_);
     go(outside, yaw_);
-    go(outside, nearestAngle(yaw_, ahead));
   }
-  go(to, yaw_);
+  go(to, nearestAngle(yaw_, ahead));
   go(to, yaw_ + M_PI);  // turn round at the far end
-  go(from, yaw_);
-  go(from, yaw_ + M_PI);  // and at the start, to face the way it began
+  // Back in pieces of at most 4 m, looking to either side in turn.
+  const double back = ahead + M_PI;
+  const int pieces = std::max(1, static_cast<int>(std::ceil((to - from).norm() / 4.0)));
+  for (int k = 1; k <= pieces; ++k)
+    go(to + (from - to) * k / pieces, looking(back, k % 2 == 1 ? -1.0 : 1.0));
+  go(from, nearestAngle(yaw_, ahead));  // and at the start, face the way it began
   if (legs_.empty()) legs_.push_back({from, from, yaw_, yaw_, 0.0, 1.0});
   duration_ = legs_.back().start + legs_.back().seconds;
 }

@@ -74,7 +74,9 @@ class LinePath : public CameraPath {
 
 // A tour of an office floor: from the corridor's start along it, into every room in the order
 // of their doors (both sides), out again, on to the corridor's end, and back along the corridor
-// to where it began, facing the way it began (then it begins again). In each room it walks
+// to where it began, facing the way it began (then it begins again). In the corridor it looks
+// ahead and 0.6 rad to one side (towards the next door, on the way back each side in turn) so
+// the corridor's walls are not only seen at grazing angles. In each room it walks
 // through the door to the plan's stops; at the last it looks right, then turns left round until
 // it faces the door (a full turn), at the others it looks right and left; it walks out facing
 // the door. Every move and turn starts and ends at rest, its speed and turn rate rising and
