@@ -67,7 +67,7 @@ class PrimitiveGrid {
 template <typename Visit>
 void PrimitiveGrid::walkRay(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                             Visit&& visit) const {
-  if (empty()) return;
+  if (empty() || !o.allFinite() || !d.allFinite()) return;
   // Clip the ray's ground projection to the grid's rectangle.
   const double lo[2] = {x0_, y0_};
   const double hi[2] = {x0_ + nx_ * cell_, y0_ + ny_ * cell_};
