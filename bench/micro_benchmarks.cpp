@@ -26,6 +26,9 @@
 #include "rgbdmap/mapping/voxel_map.hpp"
 #include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/map_piece.hpp"
+#include "rgbdmap/sim/building.hpp"
+#include "rgbdmap/sim/camera_path.hpp"
+#include "rgbdmap/sim/synthetic_sequence.hpp"
 
 namespace {
 
@@ -308,6 +311,45 @@ void BM_PclStatisticalOutlierRemoval(benchmark::State& state) {
   state.counters["kept"] = static_cast<double>(kept.size());
 }
 BENCHMARK(BM_PclStatisticalOutlierRemoval)->Unit(benchmark::kMillisecond);
+
+// `rgbdmap synth`'s ray casting, one 640 x 480 frame: Arg 0 the 8 x 6 x 3 room seen from its
+// walk, Arg 1 a 30 x 20 m office floor (a few hundred walls and pieces of furniture) seen from
+// its tour, 100 s in, a room's door ahead. Second Arg: 1 through the ground grid (what synth
+// does), 0 testing every primitive for every ray (what it did); single-threaded.
+void BM_SyntheticRaycastFrame(benchmark::State& state) {
+  const bool floor = state.range(0) == 1, grid = state.range(1) == 1;
+  const rgbdmap::SyntheticScene scene =
+      floor ? rgbdmap::generateBuilding(rgbdmap::BuildingOptions{})
+            : rgbdmap::SyntheticScene::defaultRoom(Eigen::Vector3d(8.0, 6.0, 3.0));
+  rgbdmap::SyntheticSequenceOptions options;
+  options.path = floor ? "tour" : "walk";
+  const Eigen::Isometry3d pose = rgbdmap::makeCameraPath(scene, options, 300.0)->pose(100.0);
+  const rgbdmap::CameraIntrinsics camera;
+  std::size_t hits = 0;
+  for (auto _ : state) {
+    hits = 0;
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const Eigen::Vector3d ray((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+        double t = 0.0;
+        Eigen::Vector3d normal;
+        cv::Vec3b color;
+        const Eigen::Vector3d direction = pose.linear() * ray;
+        hits += grid ? scene.raycast(pose.translation(), direction, t, normal, color)
+                     : scene.raycastEveryPrimitive(pose.translation(), direction, t, normal, color);
+      }
+    }
+    benchmark::DoNotOptimize(hits);
+  }
+  state.counters["primitives"] = static_cast<double>(scene.primitives().size());
+  state.counters["hits"] = static_cast<double>(hits);
+}
+BENCHMARK(BM_SyntheticRaycastFrame)
+    ->Args({0, 1})
+    ->Args({0, 0})
+    ->Args({1, 1})
+    ->Args({1, 0})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -1,11 +1,14 @@
 // `rgbdmap synth`: a synthetic TUM-layout sequence of a room with exact geometry, to map and
 // score without a camera or a download.
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <opencv2/core/utility.hpp>
 #include <sstream>
 #include <string>
 
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/sim/building.hpp"
 #include "rgbdmap/sim/synthetic_scene.hpp"
 #include "rgbdmap/sim/synthetic_sequence.hpp"
 #include "rgbdmap/tools/commands.hpp"
@@ -18,11 +21,17 @@ bool parseRoomSize(const std::string& text, Eigen::Vector3d& size) {
   double x = 0, y = 0, z = 0;
   char sep1 = 0, sep2 = 0;
   std::istringstream in(text);
-  if (!(in >> x >> sep1 >> y >> sep2 >> z) || sep1 != 'x' || sep2 != 'x' || !in.eof())
-    return false;
+  if (!(in >> x >> sep1 >> y >> sep2 >> z) || sep1 != 'x' || sep2 != 'x' || !in.eof()) return false;
   if (!(x >= 3.0 && y >= 3.0 && z >= 2.0 && x <= 100.0 && y <= 100.0 && z <= 20.0)) return false;
   size = Eigen::Vector3d(x, y, z);
   return true;
+}
+
+// "30x20" -> (30, 20); false unless both are numbers.
+bool parseFloorSize(const std::string& text, double& length, double& width) {
+  char sep = 0;
+  std::istringstream in(text);
+  return static_cast<bool>(in >> length >> sep >> width) && sep == 'x' && in.eof();
 }
 
 }  // namespace
@@ -33,15 +42,48 @@ void addSynthCommand(CLI::App& app, Command& selected) {
       "write a synthetic RGB-D sequence (TUM layout) of a room with exact geometry: Kinect-like "
       "depth noise, ground truth, scene.yaml and visible_surface.pcd for `rgbdmap evaluate`");
   struct Options {
-    std::string out, scene, room;
+    std::string out, scene, room, building, write_scene;
+    double height = 2.8;
     bool no_noise = false;
     SyntheticSequenceOptions sequence;
   };
   auto o = std::make_shared<Options>();
-  cmd->add_option("-o,--out", o->out, "folder to write (created if missing)")->required();
-  cmd->add_option("-n,--frames", o->sequence.frames, "number of frames")
+  cmd->add_option("-o,--out", o->out,
+                  "folder to write (created if missing); required unless --write-scene alone");
+  auto* frames = cmd->add_option("-n,--frames", o->sequence.frames,
+                                 "number of frames (a tour: default one whole tour)")
+                     ->capture_default_str()
+                     ->check(CLI::Range(1, 1000000));
+  cmd->add_option("--building", o->building,
+                  "an office floor of LENGTHxWIDTH metres instead of a room (e.g. 30x20): rooms "
+                  "off a corridor, doors, furniture; --seed changes the plan (see "
+                  "docs/synthetic.md)")
+      ->check([](const std::string& text) -> std::string {
+        double length = 0, width = 0;
+        if (!parseFloorSize(text, length, width)) return "expected e.g. 30x20";
+        BuildingOptions b;
+        b.length = length;
+        b.width = width;
+        return buildingProblem(b);
+      });
+  cmd->add_option("--height", o->height, "the building's floor-to-ceiling height (m)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1000000));
+      ->check(CLI::Range(2.4, 5.0));
+  cmd->add_option("--write-scene", o->write_scene,
+                  "also write the scene description (YAML) to this file, to edit and pass back "
+                  "with --scene; without --out nothing else is written");
+  auto* surface_voxel =
+      cmd->add_option("--surface-voxel", o->sequence.surface_voxel,
+                      "m between samples of visible_surface.pcd, the reference for recall "
+                      "(default 0.005; 0.02 for a building, to keep a floor's samples in memory)")
+          ->check(CLI::Range(0.001, 0.5));
+  cmd->add_option("--tour-speed", o->sequence.tour_speed, "the tour's top walking speed (m/s)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 3.0));
+  cmd->add_option("--tour-turn-rate", o->sequence.tour_turn_rate,
+                  "the tour's top turn rate (rad/s)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 3.0));
   cmd->add_option("--seed", o->sequence.seed, "random seed of the path's sway (and of the noise)")
       ->capture_default_str();
   auto* noise_seed = cmd->add_option(
@@ -61,9 +103,10 @@ void addSynthCommand(CLI::App& app, Command& selected) {
   cmd->add_option("--path", o->sequence.path,
                   "camera path: orbit (a circle round the room's centre, looking out), walk "
                   "(round the room along its walls, back to the start every lap: loops to "
-                  "close) or line (once along a wall, never back)")
+                  "close), line (once along a wall, never back) or tour (a building's: along the "
+                  "corridor into every room and back to the start)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"orbit", "walk", "line"}));
+      ->check(CLI::IsMember({"orbit", "walk", "line", "tour"}));
   cmd->add_option("--path-inset", o->sequence.path_inset,
                   "walk, line: metres between the path and the walls (default: 20% of the "
                   "room's width, 0.8 to 1.5 m)")
@@ -105,8 +148,8 @@ void addSynthCommand(CLI::App& app, Command& selected) {
   cmd->add_option("--png-compression", o->sequence.png_compression, "zlib level 0..9")
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
-  cmd->callback([o, noise_seed, &selected] {
-    selected = [o, noise_seed] {
+  cmd->callback([o, noise_seed, frames, surface_voxel, &selected] {
+    selected = [o, noise_seed, frames, surface_voxel] {
 #if defined(__SANITIZE_THREAD__)
       // OpenCV's parallel loops run on TBB's workers, which are not instrumented: the sanitizer
       // cannot see them finish and would report every image they wrote. Serial in that build.
@@ -115,10 +158,36 @@ void addSynthCommand(CLI::App& app, Command& selected) {
       SyntheticSequenceOptions options = o->sequence;
       options.noise = !o->no_noise;
       if (noise_seed->count() == 0) options.noise_seed = options.seed;
+      if (o->out.empty() && o->write_scene.empty())
+        throw InputError("synth: --out FOLDER is required (or --write-scene FILE alone)");
+      if (!o->building.empty() && (!o->scene.empty() || !o->room.empty()))
+        throw InputError("synth: --building makes its own scene; leave out --scene and --room");
+      if (options.path == "tour" && frames->count() == 0) options.frames = 0;  // one whole tour
       Eigen::Vector3d size(5.0, 4.0, 2.8);
       if (!o->room.empty()) parseRoomSize(o->room, size);
-      const SyntheticScene scene =
-          o->scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o->scene);
+      SyntheticScene scene;
+      if (!o->building.empty()) {
+        BuildingOptions building;
+        parseFloorSize(o->building, building.length, building.width);
+        building.height = o->height;
+        building.seed = options.seed;
+        scene = generateBuilding(building);
+        if (surface_voxel->count() == 0) options.surface_voxel = 0.02;
+      } else {
+        scene =
+            o->scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o->scene);
+      }
+      if (!o->write_scene.empty()) {
+        try {
+          scene.save(o->write_scene);
+        } catch (const std::runtime_error& e) {
+          throw InputError(e.what());
+        }
+        std::printf("wrote the scene to %s (%zu primitives, %zu walls%s)\n", o->write_scene.c_str(),
+                    scene.primitives().size(), scene.walls().size(),
+                    scene.floorPlan() ? ", a floor plan" : "");
+        if (o->out.empty()) return 0;
+      }
       if (o->out.find("freiburg") != std::string::npos)
         std::fprintf(stderr,
                      "rgbdmap synth: warning: '%s' contains 'freiburg', so rgbdmap would pick a "
@@ -126,6 +195,10 @@ void addSynthCommand(CLI::App& app, Command& selected) {
                      "intrinsics (pass --config default when mapping it)\n",
                      o->out.c_str());
       const SyntheticSequenceSummary summary = writeSyntheticSequence(o->out, scene, options);
+      if (summary.path_seconds > 0.0)
+        std::printf("tour: %.0f m in %.1f s (%d frames at %.0f fps, one tour: %.0f frames)\n",
+                    summary.path_length, summary.path_seconds, summary.frames, options.fps,
+                    std::floor(summary.path_seconds * options.fps) + 1);
       std::printf(
           "wrote %d frames to %s in %.1f s (%.1f%% of pixels with depth, %zu visible surface "
           "samples)\nmap it:   rgbdmap --source tum:%s --out map.pcd --rate max\nscore it: "

@@ -41,12 +41,17 @@ void validate(const SyntheticSequenceOptions& o) {
   auto require = [](bool ok, const std::string& what) {
     if (!ok) throw InputError("synthetic sequence: " + what);
   };
-  require(o.frames > 0, "frames must be positive");
+  require(o.frames > 0 || (o.frames == 0 && o.path == "tour"),
+          "frames must be positive (0, one whole tour, only for the tour)");
   require(o.fps > 0.0 && o.fps <= 1000.0, "fps must be in (0, 1000]");
   require(o.loop_seconds > 0.0, "loop_seconds must be positive");
   require(o.path_radius >= 0.0, "path_radius must not be negative");
-  require(o.path == "orbit" || o.path == "walk" || o.path == "line",
-          "path '" + o.path + "' is unknown (expected orbit, walk or line)");
+  require(o.path == "orbit" || o.path == "walk" || o.path == "line" || o.path == "tour",
+          "path '" + o.path + "' is unknown (expected orbit, walk, line or tour)");
+  require(o.tour_speed > 0.0 && o.tour_speed <= 3.0, "tour_speed must be in (0, 3] m/s");
+  require(o.tour_turn_rate > 0.0 && o.tour_turn_rate <= 3.0,
+          "tour_turn_rate must be in (0, 3] rad/s");
+  require(o.tour_margin >= 0.0, "tour_margin must not be negative");
   require(o.path_inset >= 0.0, "path_inset must not be negative");
   require(std::abs(o.depth_scale_error) < 0.2, "depth_scale_error must be within +-0.2");
   require(std::abs(o.focal_error) < 0.2, "focal_error must be within +-0.2");
@@ -138,6 +143,12 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
   out << YAML::Key << "loop_seconds" << YAML::Value << o.loop_seconds;
   out << YAML::Key << "path" << YAML::Value << o.path;
   out << YAML::Key << "path_inset" << YAML::Value << o.path_inset;
+  if (o.path == "tour") {
+    out << YAML::Key << "tour_speed" << YAML::Value << o.tour_speed;
+    out << YAML::Key << "tour_turn_rate" << YAML::Value << o.tour_turn_rate;
+    out << YAML::Key << "tour_length_m" << YAML::Value << summary.path_length;
+    out << YAML::Key << "tour_seconds" << YAML::Value << summary.path_seconds;
+  }
   out << YAML::Key << "depth_scale_error" << YAML::Value << o.depth_scale_error;
   out << YAML::Key << "focal_error" << YAML::Value << o.focal_error;
   out << YAML::Key << "brightness_drift" << YAML::Value << o.brightness_drift;
@@ -184,12 +195,29 @@ std::unique_ptr<CameraPath> makeCameraPath(const ScenePrimitive& room,
                   inset, options.path.c_str(), size.x(), size.y());
     throw InputError(text);
   }
+  if (options.path == "tour")
+    throw InputError(
+        "synthetic sequence: the tour needs a building's floor plan (rgbdmap synth --building, or "
+        "a scene.yaml with a floor_plan)");
   if (options.path == "walk")
     return std::make_unique<WalkPath>(room, options.seed, options.loop_seconds, inset);
   if (options.path == "line")
     return std::make_unique<LinePath>(room, options.seed, duration, inset);
   return std::make_unique<HandheldPath>(room, options.seed, options.loop_seconds,
                                         options.path_radius);
+}
+
+std::unique_ptr<CameraPath> makeCameraPath(const SyntheticScene& scene,
+                                           const SyntheticSequenceOptions& options,
+                                           double duration) {
+  if (options.path != "tour") return makeCameraPath(scene.room(), options, duration);
+  const FloorPlan* plan = scene.floorPlan();
+  if (!plan)
+    throw InputError(
+        "synthetic sequence: the tour needs a floor plan, and this scene has none (rgbdmap synth "
+        "--building makes one; a scene.yaml may have a floor_plan: see docs/synthetic.md)");
+  return std::make_unique<TourPath>(*plan, options.seed, options.tour_speed,
+                                    options.tour_turn_rate);
 }
 
 SyntheticRenderer::SyntheticRenderer(const SyntheticScene& scene, const CameraIntrinsics& camera)
@@ -258,14 +286,18 @@ void writeGroundTruth(const std::string& folder, const SyntheticScene& scene,
                       const SyntheticSequenceOptions& options) {
   const int gt_margin = 5;  // samples of ground truth before the first and after the last frame
   const int gt_samples = static_cast<int>(std::ceil(duration * options.groundtruth_rate));
+  const bool tour = options.path == "tour";
+  const double margin =
+      tour ? std::max(options.camera_margin, options.tour_margin) : options.camera_margin;
   for (int k = -gt_margin; k <= gt_samples + gt_margin; ++k) {
     const Eigen::Vector3d p = path.pose(k / options.groundtruth_rate).translation();
-    if (!scene.isFreeSpace(p, options.camera_margin))
+    if (!scene.isFreeSpace(p, margin))
       throw InputError("synthetic sequence: the " + options.path + " path comes within " +
-                       std::to_string(options.camera_margin) +
+                       std::to_string(margin) +
                        " m of a surface at t = " + std::to_string(k / options.groundtruth_rate) +
                        " s; the scene leaves too little free space " +
                        (options.path == "orbit" ? "around the room's centre"
+                        : tour                  ? "along the floor plan's corridor, doors and stops"
                                                 : "inside the walls (try another --path-inset)"));
   }
 
@@ -367,9 +399,15 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     if (ec) throw InputError(folder + "/" + sub + ": cannot create folder (" + ec.message() + ")");
   }
 
-  const double duration = (options.frames - 1) / options.fps;
-  const std::unique_ptr<CameraPath> camera_path = makeCameraPath(scene.room(), options, duration);
+  const std::unique_ptr<CameraPath> camera_path =
+      makeCameraPath(scene, options, (std::max(options.frames, 1) - 1) / options.fps);
   const CameraPath& path = *camera_path;
+  const auto* tour = dynamic_cast<const TourPath*>(&path);
+  // frames = 0: one whole tour, ending where it began.
+  const int frames = options.frames > 0 || !tour
+                         ? options.frames
+                         : static_cast<int>(std::floor(tour->duration() * options.fps)) + 1;
+  const double duration = (frames - 1) / options.fps;
   writeGroundTruth(folder, scene, path, duration, options);
   writeAccelerometer(folder, path, duration, options);
 
@@ -392,7 +430,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   std::mt19937_64 stamp_random(options.seed ^ 0x5EEDull);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
 
-  for (int i = 0; i < options.frames; ++i) {
+  for (int i = 0; i < frames; ++i) {
     const double t = i / options.fps;
     const double rgb_stamp = options.start_time + t;
     const double depth_stamp =
@@ -453,12 +491,18 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
                      (cloud.empty() ? std::string(" (the camera saw no surface in range)") : ""));
 
   SyntheticSequenceSummary summary;
-  summary.frames = options.frames;
+  summary.frames = frames;
+  if (tour) {
+    summary.path_length = tour->length();
+    summary.path_seconds = tour->duration();
+  }
   summary.surface_points = cloud.size();
   summary.valid_depth_share = static_cast<double>(valid_pixels) /
-                              (static_cast<double>(options.frames) * camera.width * camera.height);
+                              (static_cast<double>(frames) * camera.width * camera.height);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  writeOptions(folder + "/synthetic.yaml", options, summary);
+  SyntheticSequenceOptions written = options;
+  written.frames = frames;
+  writeOptions(folder + "/synthetic.yaml", written, summary);
   return summary;
 }
 

@@ -4,7 +4,9 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "rgbdmap/sim/floor_plan.hpp"
 #include "rgbdmap/sim/synthetic_scene.hpp"
 
 namespace rgbdmap {
@@ -67,6 +69,38 @@ class LinePath : public CameraPath {
  private:
   Eigen::Vector3d start_, end_;
   double duration_;
+  double phase_[8];
+};
+
+// A tour of an office floor: from the corridor's start along it, into every room in the order
+// of their doors (both sides), out again, on to the corridor's end, and back along the corridor
+// to where it began, facing the way it began (then it begins again). In the corridor it looks
+// ahead and 0.6 rad to one side (towards the next door, on the way back each side in turn) so
+// the corridor's walls are not only seen at grazing angles. In each room it walks
+// through the door to the plan's stops; at the last it looks right, then turns left round until
+// it faces the door (a full turn), at the others it looks right and left; it walks out facing
+// the door. Every move and turn starts and ends at rest, its speed and turn rate rising and
+// falling smoothly (continuous acceleration) to at most `speed` (m/s) and `turn_rate` (rad/s), so
+// the tour sets its own pace: duration() and length() say how long it is. A hand's sway of a few
+// centimetres and degrees rides on it, as on the walk.
+class TourPath : public CameraPath {
+ public:
+  TourPath(const FloorPlan& plan, std::uint64_t seed, double speed, double turn_rate);
+  Eigen::Isometry3d pose(double t) const override;
+  double duration() const { return duration_; }  // s of one tour
+  double length() const { return length_; }      // m walked on the ground, sway aside
+
+ private:
+  // One move from a to b while the heading turns from yaw_a to yaw_b, over `seconds`.
+  struct Leg {
+    Eigen::Vector2d a, b;
+    double yaw_a, yaw_b, start, seconds;
+  };
+  void go(const Eigen::Vector2d& to, double yaw);
+
+  std::vector<Leg> legs_;
+  Eigen::Vector2d at_ = Eigen::Vector2d::Zero();
+  double yaw_ = 0.0, speed_, turn_rate_, duration_ = 0.0, length_ = 0.0, height_;
   double phase_[8];
 };
 

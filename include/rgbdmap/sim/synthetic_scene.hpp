@@ -2,8 +2,12 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "rgbdmap/sim/floor_plan.hpp"
+#include "rgbdmap/sim/primitive_grid.hpp"
 
 namespace rgbdmap {
 
@@ -35,6 +39,28 @@ struct ScenePrimitive {
   double radius = 0.0;
   SurfaceTexture texture;
   std::string name;  // for messages and the YAML file
+  int wall = -1;     // a piece of SyntheticScene::walls()[wall], or -1
+};
+
+// An opening in a wall from its foot up to `height` (a door: the wall goes on above it).
+struct WallDoor {
+  double at = 0.0;      // m from the wall's `from` end to the opening's centre
+  double width = 1.0;   // m
+  double height = 2.1;  // m; at least the wall's height: an opening to the top (no lintel)
+};
+
+// A straight wall along x or y, `thickness` thick about the line from `from` to `to`, from `base`
+// up to base + height, with doors. It is made of boxes: one beside each door and one above it
+// (the lintel), so both its faces, the door's jambs and the lintel's underside are surfaces.
+struct SceneWall {
+  Eigen::Vector2d from = Eigen::Vector2d::Zero();  // (x, y) of its ends, on its centre line
+  Eigen::Vector2d to = Eigen::Vector2d::Zero();
+  double base = 0.0;  // z of its foot
+  double height = 2.8;
+  double thickness = 0.12;
+  std::vector<WallDoor> doors;
+  SurfaceTexture texture;
+  std::string name;
 };
 
 // A scene of exact primitives: ray casting for rendering, exact distance to the nearest surface
@@ -47,6 +73,16 @@ class SyntheticScene {
               const std::string& name);
   void addSphere(const Eigen::Vector3d& center, double radius, const SurfaceTexture& texture,
                  const std::string& name);
+  // Adds the wall's boxes; throws std::invalid_argument saying what is wrong (wallProblem).
+  void addWall(const SceneWall& wall);
+  // Empty if the wall can be built, else what is wrong with it (not along x or y, a door
+  // outside it or overlapping another, a size that is not positive).
+  static std::string wallProblem(const SceneWall& wall);
+  const std::vector<SceneWall>& walls() const { return walls_; }
+
+  // The corridor and rooms a camera tour visits (a building's), if the scene has them.
+  void setFloorPlan(const FloorPlan& plan) { plan_ = plan; }
+  const FloorPlan* floorPlan() const { return plan_ ? &*plan_ : nullptr; }
 
   const std::vector<ScenePrimitive>& primitives() const { return primitives_; }
   // The room's bounds; throws std::logic_error if the scene has no room.
@@ -60,14 +96,19 @@ class SyntheticScene {
                Eigen::Vector3d& normal, cv::Vec3b& color) const;
   // Exact unsigned distance from p to the nearest surface of any primitive.
   double distance(const Eigen::Vector3d& p) const;
+  // The same two, testing every primitive instead of those the ground grid lists along the ray
+  // or around p: the reference the grid is checked against (tests, benchmarks).
+  bool raycastEveryPrimitive(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                             double& t, Eigen::Vector3d& normal, cv::Vec3b& color) const;
+  double distanceEveryPrimitive(const Eigen::Vector3d& p) const;
   // True if p is inside the room, outside every box and sphere, and at least `margin` from
   // every surface: where a camera may be.
   bool isFreeSpace(const Eigen::Vector3d& p, double margin) const;
 
   // Writes the scene as YAML; throws std::runtime_error naming the file on failure.
   void save(const std::string& path) const;
-  // Reads a scene written by save(); throws InputError naming the file (and line) and what is
-  // wrong.
+  // Reads a scene written by save() (or by hand: docs/synthetic.md); throws InputError naming
+  // the file (and line) and what is wrong.
   static SyntheticScene load(const std::string& path);
 
   // A 5 x 4 x 2.8 m room with a table, a cabinet, cubes on the floor and the table, and three
@@ -78,7 +119,22 @@ class SyntheticScene {
   static SyntheticScene defaultRoom(const Eigen::Vector3d& size);
 
  private:
+  void addPrimitive(const ScenePrimitive& primitive);
+  // The nearest hit of primitive `index` (t, and the hit face's axis for boxes).
+  bool hitPrimitive(std::size_t index, const Eigen::Vector3d& origin,
+                    const Eigen::Vector3d& direction, double& t, int& axis) const;
+  // Normal and colour of a hit of primitive `index` at t.
+  void shade(std::size_t index, int axis, const Eigen::Vector3d& origin,
+             const Eigen::Vector3d& direction, double t, Eigen::Vector3d& normal,
+             cv::Vec3b& color) const;
+  double primitiveDistance(std::size_t index, const Eigen::Vector3d& p) const;
+
   std::vector<ScenePrimitive> primitives_;
+  std::vector<SceneWall> walls_;
+  std::optional<FloorPlan> plan_;
+  // Every primitive but the rooms, over the ground plane; the rooms are tested for every query.
+  PrimitiveGrid grid_;
+  std::vector<std::uint32_t> rooms_;
 };
 
 }  // namespace rgbdmap

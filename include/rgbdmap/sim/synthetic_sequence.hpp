@@ -17,17 +17,21 @@ namespace rgbdmap {
 double kinectDepthSigma(double z);
 
 struct SyntheticSequenceOptions {
-  int frames = 300;
+  int frames = 300;  // 0: one whole tour (path "tour" only)
   double fps = 30.0;
   std::uint64_t seed = 1;        // the camera path's sway and the depth stamps
   std::uint64_t noise_seed = 1;  // the sensor noise: a second pass over a path with fresh noise
   bool noise = true;  // depth noise, dropouts and colour noise; false: exact depth (quantised)
   // The camera's path: "orbit" (HandheldPath), "walk" (WalkPath: round the room along its
-  // walls, coming back every lap) or "line" (LinePath: once along a wall, never back).
+  // walls, coming back every lap), "line" (LinePath: once along a wall, never back) or "tour"
+  // (TourPath: every room of a building's floor plan, back to the start).
   std::string path = "orbit";
-  double loop_seconds = 12.0;  // one circle (orbit) or lap (walk) of the room
-  double path_radius = 0.0;    // m: of the circle; 0: scaled to the room (HandheldPath)
-  double path_inset = 0.0;     // m from the walls (walk, line); 0: 20% of the room's width
+  double tour_speed = 0.5;      // m/s: the tour's top walking speed
+  double tour_turn_rate = 0.5;  // rad/s: the tour's top turn rate (sway aside)
+  double tour_margin = 0.5;     // m: a tour keeps this far from every surface (the depth's range)
+  double loop_seconds = 12.0;   // one circle (orbit) or lap (walk) of the room
+  double path_radius = 0.0;     // m: of the circle; 0: scaled to the room (HandheldPath)
+  double path_inset = 0.0;      // m from the walls (walk, line); 0: 20% of the room's width
   // Sensor errors that make odometry drift as a real camera's does; 0: an ideal sensor. Depth
   // is measured (1 + depth_scale_error) times too far; the lens' focal lengths are
   // (1 + focal_error) times those declared (`camera`, what the mapper assumes); the colour
@@ -59,6 +63,8 @@ struct SyntheticSequenceSummary {
   std::size_t surface_points = 0;  // in visible_surface.pcd
   double valid_depth_share = 0.0;  // pixels with a depth measurement
   double seconds = 0.0;            // wall time of the generation
+  double path_length = 0.0;        // m walked by a tour (0 for the other paths)
+  double path_seconds = 0.0;       // s of one tour (0 for the other paths)
 };
 
 // Renders a camera's view of the scene: z-depth in metres (0 = no hit) without noise, the lit
@@ -78,8 +84,13 @@ class SyntheticRenderer {
   Eigen::Vector3d light_;              // a lamp under the ceiling, for view-independent shading
 };
 
-// The camera path `options` ask for through `room` (a sequence of `duration` seconds).
+// The camera path `options` ask for through `room` (a sequence of `duration` seconds); not a
+// tour, which needs a scene's floor plan.
 std::unique_ptr<CameraPath> makeCameraPath(const ScenePrimitive& room,
+                                           const SyntheticSequenceOptions& options,
+                                           double duration);
+// The same in `scene`; a tour follows the scene's floor plan (InputError if it has none).
+std::unique_ptr<CameraPath> makeCameraPath(const SyntheticScene& scene,
                                            const SyntheticSequenceOptions& options,
                                            double duration);
 
