@@ -18,12 +18,11 @@
 #include <condition_variable>
 #include <filesystem>
 #include <mutex>
-#include <set>
-#include <sstream>
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/ros/cloud_message.hpp"
+#include "rgbdmap/ros/robot_namespaces.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/fleet_merger.hpp"
@@ -44,28 +43,11 @@ struct Settings {
   bool resume = true;  // pick up from the session saved at ~out
 };
 
-// ~robots: a list of strings, or one string of names separated by spaces or commas.
+// ~robots: a rosparam list, or one string (a YAML list, or names separated by spaces or commas).
 std::vector<std::string> robotsParam(const ros::NodeHandle& pnh) {
-  std::vector<std::string> robots;
-  std::string text;
-  if (!pnh.getParam("robots", robots) && pnh.getParam("robots", text)) {
-    for (char& c : text)
-      if (c == ',') c = ' ';
-    std::istringstream words(text);
-    for (std::string w; words >> w;) robots.push_back(w);
-  }
-  std::set<std::string> seen;
-  for (std::string& r : robots) {
-    while (!r.empty() && r.back() == '/') r.pop_back();
-    if (r.empty() || r.front() != '/') r = "/" + r;
-    if (!seen.insert(r).second)
-      throw InputError("parameter " + pnh.resolveName("robots") + ": " + r + " is listed twice");
-  }
-  if (robots.size() < 2)
-    throw InputError("parameter " + pnh.resolveName("robots") +
-                     ": the namespaces of two robots or more, the first one's frame is the "
-                     "merged map's (e.g. _robots:=\"robot1 robot2\")");
-  return robots;
+  XmlRpc::XmlRpcValue value;
+  if (!pnh.getParam("robots", value)) value.clear();  // invalid: none given
+  return robotNamespaces(value, pnh.resolveName("robots"));
 }
 
 Settings readSettings(const ros::NodeHandle& pnh) {
