@@ -121,7 +121,9 @@ int play(const Options& o) {
   // Every image goes to a subscriber: none is published before the node listens to each image
   // topic. (Other topics, camera_info, go out with them whether anyone listens or not.)
   if (images.empty()) throw InputError(o.bag + ": no image topic to play");
-  spdlog::info("{}: waiting for {} (with ~lossless) to subscribe", o.bag, node);
+  std::string listed;
+  for (const std::string& topic : images) listed += " " + o.prefix + topic;
+  spdlog::info("{}: waiting for {} (with ~lossless) to subscribe to{}", o.bag, node, listed);
   for (bool all = false; !all && ros::ok(); ros::WallDuration(0.1).sleep()) {
     all = progress.getNumPublishers() > 0;
     for (const std::string& topic : images) all = all && publishers[topic].getNumSubscribers() > 0;
@@ -167,7 +169,9 @@ int main(int argc, char** argv) {
   app.add_option("bag", o.bag, "bag to play")->required();
   app.add_option("--prefix", o.prefix, "put before every topic (a robot's namespace: /robot1)");
   app.add_option("--node", o.node, "the node's name (default: PREFIX/rgbdmap)");
-  app.add_option("--topics", o.topics, "only these topics of the bag");
+  app.add_option("--topics", o.topics,
+                 "only these topics of the bag (its image topics must be the node's colour and "
+                 "depth: choose them here when it has others)");
   app.add_option("--lead", o.lead, "seconds of the bag the player may be ahead of the node")
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
