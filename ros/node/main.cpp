@@ -56,7 +56,8 @@ bool writeMapNow(RunControl& control, const RunStats& stats, const std::string& 
 }
 
 std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c,
-                           std::uint64_t maps, const SessionStream::Totals& session) {
+                           std::uint64_t maps, const SessionStream::Totals& session,
+                           std::uint64_t session_dropped) {
   const auto brace = json.find_last_of('}');
   std::string out = json.substr(0, brace);
   while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
@@ -71,7 +72,8 @@ std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c
          ", \"session_keyframes\": " + std::to_string(session.keyframes) +
          ", \"session_places\": " + std::to_string(session.places) +
          ", \"session_pieces\": " + std::to_string(session.pieces) +
-         ", \"session_piece_bytes\": " + std::to_string(session.piece_bytes) + "}\n}\n";
+         ", \"session_piece_bytes\": " + std::to_string(session.piece_bytes) +
+         ", \"session_keyframes_dropped\": " + std::to_string(session_dropped) + "}\n}\n";
   return out;
 }
 
@@ -100,7 +102,7 @@ int runNode(RunControl& control, RunSignals& signals) {
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.
   ros::AsyncSpinner image_spinner(1);
-  auto source = std::make_unique<TopicSource>(nh, config, control.stop);
+  auto source = std::make_unique<TopicSource>(nh, config, control.stop, settings.lossless);
   TopicSource& topics = *source;
   image_spinner.start();
   if (!topics.waitForCamera()) {
@@ -138,6 +140,7 @@ int runNode(RunControl& control, RunSignals& signals) {
   // Only a mapping run has a session to stream (localising adds nothing to the saved one).
   publish.session.interval = localise_in ? 0.0 : settings.session_interval;
   publish.session.stream.bytes_per_second = settings.session_rate;
+  publish.session.lossless = settings.lossless;
   RosPublisher publisher(pnh, publish);
 
   outputs.status_line = false;
@@ -181,6 +184,11 @@ int runNode(RunControl& control, RunSignals& signals) {
         });
   ros::AsyncSpinner service_spinner(1, &service_queue);
   service_spinner.start();
+  if (settings.lossless)
+    spdlog::info(
+        "lossless: every image is kept until mapped; {} says how far the node has got "
+        "(rgbdmap-play waits for it)",
+        pnh.resolveName("intake"));
   if (localise_in)
     spdlog::info("localising in {}: publishing {} and TF {} -> {} in the saved map's frame",
                  settings.localise, pnh.resolveName("pose"), publish.map_frame,
@@ -211,9 +219,10 @@ int runNode(RunControl& control, RunSignals& signals) {
       stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
   if (!settings.stats.empty()) {
     std::ofstream out(settings.stats);
-    out << withNodeCounts(
-        stats.toJson(), counts, publisher.mapsPublished(),
-        publisher.session() ? publisher.session()->totals() : SessionStream::Totals{});
+    SessionPublisher* session = publisher.session();
+    out << withNodeCounts(stats.toJson(), counts, publisher.mapsPublished(),
+                          session ? session->totals() : SessionStream::Totals{},
+                          session ? session->keyframesDropped() : 0);
     if (!out) spdlog::error("{}: cannot write statistics", settings.stats);
   }
   service_spinner.stop();

@@ -47,6 +47,13 @@ double numberParam(const ros::NodeHandle& nh, const std::string& name,
   throw InputError("parameter " + nh.resolveName(name) + ": '" + value + "' is not a number");
 }
 
+bool boolParam(const ros::NodeHandle& nh, const std::string& name, bool fallback) {
+  const std::string value = stringParam(nh, name, fallback ? "true" : "false");
+  if (value == "true" || value == "1") return true;
+  if (value == "false" || value == "0") return false;
+  throw InputError("parameter " + nh.resolveName(name) + ": '" + value + "' is not true or false");
+}
+
 }  // namespace
 
 NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
@@ -73,6 +80,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
                        ": nothing is mapped while localising (no ~grid or ~octomap)");
     s.octomap.clear();
   }
+  s.lossless = boolParam(nh, "lossless", false);
   s.continue_from = stringParam(nh, "continue", "");
   if (!s.continue_from.empty()) {
     if (!s.localise.empty())
@@ -91,9 +99,9 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   std::vector<std::string> names;
   const std::string prefix = nh.getNamespace() + "/";
   const std::set<std::string> settings = {
-      "config",        "out",  "stats",   "map_frame", "camera_frame", "map_interval",
-      "grid_interval", "grid", "octomap", "localise",  "continue",     "session_interval",
-      "session_rate"};
+      "config",        "out",     "stats",   "map_frame", "camera_frame", "map_interval",
+      "grid_interval", "grid",    "octomap", "localise",  "continue",     "session_interval",
+      "session_rate",  "lossless"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
@@ -108,7 +116,7 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
                          "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
                          "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, "
                          "~localise, ~continue, ~session_interval, " +
-                         "~session_rate)");
+                         "~session_rate, ~lossless)");
     }
   }
   for (const Key& key : config.keys()) {

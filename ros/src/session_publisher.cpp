@@ -49,6 +49,11 @@ void SessionPublisher::attach(const LoopCloser* graph, const CameraIntrinsics& c
     started_ = steadySeconds();
   }
   attached_.store(graph != nullptr);
+  if (!graph) {
+    // A tracking thread waiting for room (lossless) waits no more: nothing is taken from now on.
+    { std::lock_guard<std::mutex> incoming(incoming_mutex_); }
+    room_.notify_all();
+  }
   if (!graph && graph_ && stream_) {
     // What the budget still allows goes out before the graph is let go.
     send(steadySeconds());
@@ -75,6 +80,11 @@ SessionStream::Totals SessionPublisher::totals() const {
   return stream_ ? stream_->totals() : totals_;
 }
 
+std::uint64_t SessionPublisher::keyframesDropped() const {
+  std::lock_guard<std::mutex> lock(incoming_mutex_);
+  return pieces_dropped_;
+}
+
 void SessionPublisher::addKeyframe(const Frame& keyframe) {
   if (!attached_.load()) return;
   {
@@ -82,7 +92,9 @@ void SessionPublisher::addKeyframe(const Frame& keyframe) {
     // thread, not the tracking thread's (0.7 ms a keyframe). The thread wakes for it, so a few
     // are enough; a stalled thread costs at most this many images.
     constexpr std::size_t kMaxQueued = 8;
-    std::lock_guard<std::mutex> lock(incoming_mutex_);
+    std::unique_lock<std::mutex> lock(incoming_mutex_);
+    if (options_.lossless)
+      room_.wait(lock, [&] { return incoming_.size() < kMaxQueued || !attached_.load(); });
     if (incoming_.size() >= kMaxQueued) {
       spare_.push_back(std::move(incoming_.front()));
       incoming_.pop_front();
@@ -105,6 +117,7 @@ void SessionPublisher::takeKeyframes() {
     std::lock_guard<std::mutex> lock(incoming_mutex_);
     keyframes.swap(incoming_);
   }
+  room_.notify_all();
   for (Frame& keyframe : keyframes) stream_->addKeyframe(keyframe);
   std::lock_guard<std::mutex> lock(incoming_mutex_);
   for (Frame& keyframe : keyframes)

@@ -1,6 +1,7 @@
 #include "rgbdmap/ros/topic_source.hpp"
 
 #include <spdlog/spdlog.h>
+#include <std_msgs/UInt64MultiArray.h>
 
 #include <chrono>
 
@@ -31,12 +32,21 @@ double stampOf(const sensor_msgs::Image& msg) {
 
 }  // namespace
 
-TopicSource::TopicSource(ros::NodeHandle& nh, const Config& config, const std::atomic<bool>& stop)
-    : config_(config), stop_(stop), camera_(config.camera) {
+TopicSource::TopicSource(ros::NodeHandle& nh, const Config& config, const std::atomic<bool>& stop,
+                         bool lossless)
+    : config_(config), stop_(stop), lossless_(lossless), camera_(config.camera) {
+  // Advertised before subscribing: a player that waits for the node's subscriptions finds it.
+  // Latched: a player that connects late still learns where the node is (else it would wait for
+  // a pair the node has already taken).
+  if (lossless_)
+    intake_pub_ = ros::NodeHandle("~").advertise<std_msgs::UInt64MultiArray>("intake", 1, true);
   // Large images: a short subscriber queue (the pairer holds a window of its own), no Nagle.
+  // Lossless, no image may be dropped on the way in: the queue is unbounded, and the player's
+  // pacing by ~intake keeps it short (rgbdmap-play).
+  const std::uint32_t queue = lossless_ ? 0 : kSubscriberQueue;
   const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();
-  color_sub_ = nh.subscribe(kColorTopic, kSubscriberQueue, &TopicSource::onColor, this, hints);
-  depth_sub_ = nh.subscribe(kDepthTopic, kSubscriberQueue, &TopicSource::onDepth, this, hints);
+  color_sub_ = nh.subscribe(kColorTopic, queue, &TopicSource::onColor, this, hints);
+  depth_sub_ = nh.subscribe(kDepthTopic, queue, &TopicSource::onDepth, this, hints);
   info_sub_ = nh.subscribe(kCameraInfoTopic, 1, &TopicSource::onCameraInfo, this);
   color_topic_ = color_sub_.getTopic();
   depth_topic_ = depth_sub_.getTopic();
@@ -60,6 +70,7 @@ void TopicSource::onColor(const ImagePtr& msg) {
   if (camera_frame_.empty()) camera_frame_ = msg->header.frame_id;
   pairer_.addColor(stampOf(*msg), msg);
   takePairs();
+  publishIntake();
 }
 
 void TopicSource::onDepth(const ImagePtr& msg) {
@@ -67,6 +78,35 @@ void TopicSource::onDepth(const ImagePtr& msg) {
   ++counts_.depth_received;
   pairer_.addDepth(stampOf(*msg), msg);
   takePairs();
+  publishIntake();
+}
+
+void TopicSource::publishIntake() {
+  if (!lossless_) return;
+  std_msgs::UInt64MultiArray intake;
+  intake.data = {counts_.color_received, counts_.depth_received, taken_, last_taken_.toNSec()};
+  intake_pub_.publish(intake);
+}
+
+bool TopicSource::inputEnded() const {
+  return color_sub_.getNumPublishers() == 0 && depth_sub_.getNumPublishers() == 0;
+}
+
+bool TopicSource::waitForNextPair() {
+  if (!lossless_) {
+    // The newest images settle into pairs only when later ones arrive: when the camera pauses
+    // (a bag played to its end) they are paired after a short wait instead of never.
+    return waitForPair(kSettleTimeout) ||
+           (!stop_.load() && (flushPairs() || waitForPair(kFrameTimeout - kSettleTimeout)));
+  }
+  // Lossless, a pause is a player waiting for the node or held up by a busy machine, not the
+  // end: the newest images are paired once the player has gone (it leaves once the node has
+  // received everything it sent), and only then does the input fall silent.
+  while (!stop_.load()) {
+    if (waitForPair(0.1)) return true;
+    if (inputEnded()) return flushPairs();
+  }
+  return false;
 }
 
 void TopicSource::onCameraInfo(const sensor_msgs::CameraInfo::ConstPtr& msg) {
@@ -83,7 +123,7 @@ void TopicSource::takePairs() {
   while (pairer_.next(pair)) {
     ++counts_.paired;
     ready_.push_back(std::move(pair));
-    if (ready_.size() > (reading_ ? kReadyPairs : kStartupPairs)) {
+    if (!lossless_ && ready_.size() > (reading_ ? kReadyPairs : kStartupPairs)) {
       ready_.pop_front();
       ++counts_.buffer_dropped;
     }
@@ -162,12 +202,11 @@ bool TopicSource::flushPairs() {
 }
 
 ReadStatus TopicSource::read(Frame& frame) {
-  // The newest images settle into pairs only when later ones arrive: when the camera pauses (a
-  // bag played to its end) they are paired after a short wait instead of never.
-  if (!waitForPair(kSettleTimeout) && !stop_.load() && !flushPairs() &&
-      !waitForPair(kFrameTimeout - kSettleTimeout)) {
+  if (!waitForNextPair()) {
     // A stop while waiting is the end of the stream, not a camera that went away.
-    return stop_.load() ? ReadStatus::kEnd : ReadStatus::kTimeout;
+    if (stop_.load()) return ReadStatus::kEnd;
+    logCounts();
+    return ReadStatus::kTimeout;
   }
   if (stop_.load() && !waitForPair(0)) return ReadStatus::kEnd;
   Pair pair;
@@ -176,6 +215,9 @@ ReadStatus TopicSource::read(Frame& frame) {
     reading_ = true;
     pair = std::move(ready_.front());
     ready_.pop_front();
+    ++taken_;
+    last_taken_ = pair.color->header.stamp;
+    publishIntake();
   }
   std::string error;
   if (!depthFromMessage(*pair.depth, frame.depth, error)) {
@@ -202,7 +244,19 @@ ReadStatus TopicSource::read(Frame& frame) {
   return ReadStatus::kFrame;
 }
 
-bool TopicSource::reconnect() { return waitForPair(1.0) || flushPairs(); }
+void TopicSource::logCounts() const {
+  const Counts c = counts();
+  spdlog::info(
+      "{}: camera silent after {} colour and {} depth images ({} colour lost before the node): {} "
+      "pairs, {} dropped in the node's buffer, {} images unpaired",
+      color_topic_, c.color_received, c.depth_received, c.color_lost, c.paired, c.buffer_dropped,
+      c.unmatched);
+}
+
+bool TopicSource::reconnect() {
+  // Lossless, a new player may come (the next bag): its images are paired as they arrive.
+  return waitForPair(1.0) || ((!lossless_ || inputEnded()) && flushPairs());
+}
 
 std::string TopicSource::describe() const {
   return "ros:" + color_topic_ + " + " + depth_topic_ + " (intrinsics from " + intrinsics_from_ +

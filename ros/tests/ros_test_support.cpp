@@ -7,6 +7,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -52,21 +54,28 @@ void RosTest::TearDown() {
 std::string nodeBinary() { return RGBDMAP_NODE_BINARY; }
 std::string mergerBinary() { return RGBDMAP_MERGER_BINARY; }
 std::string tum2bagBinary() { return RGBDMAP_TUM2BAG_BINARY; }
+std::string playBinary() { return RGBDMAP_PLAY_BINARY; }
 
-std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns) {
+std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns, Pace pace) {
   std::vector<std::string> args = {nodeBinary(), "_out:=" + dir + "/map.pcd",
                                    "_stats:=" + dir + "/stats.json", "_map_interval:=1"};
   if (!ns.empty()) {
     args.push_back("__ns:=" + ns);
     args.push_back("_map_frame:=" + ns + "/map");
   }
+  if (pace == Pace::kNode) args.push_back("_lossless:=true");
   return args;
 }
 
-std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
-                              const std::string& log) {
+std::unique_ptr<Process> play(const std::string& bag, const std::string& ns, const std::string& log,
+                              Pace pace) {
   const std::string p = ns.empty() ? "" : "/" + ns;
-  std::vector<std::string> args = {"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers"};
+  // rgbdmap-play waits for the node's ~intake (half a second of the bag ahead at most);
+  // rosbag play at the recorded rate waits for nothing once the node subscribed.
+  std::vector<std::string> args =
+      pace == Pace::kNode
+          ? std::vector<std::string>{playBinary(), "--lead", "0.5"}
+          : std::vector<std::string>{"/usr/bin/rosbag", "play", "-q", "--wait-for-subscribers"};
   if (!ns.empty()) args.push_back("--prefix=" + p);
   args.push_back(bag);  // before --topics, which takes every argument after it
   for (const char* t :
@@ -80,7 +89,48 @@ bool waitUntilSilent(const std::string& node_log) {
       [&] {
         return readFile(node_log).find("camera stopped delivering frames") != std::string::npos;
       },
-      30);
+      60);
+}
+
+namespace {
+
+// The numbers in `text` from `marker` on to the end of its line, in order.
+std::vector<double> numbersAfter(const std::string& text, const std::string& marker) {
+  std::vector<double> numbers;
+  const std::size_t at = text.rfind(marker);
+  if (at == std::string::npos) return numbers;
+  const std::size_t end = std::min(text.find('\n', at), text.size());
+  for (std::size_t i = at + marker.size(); i < end; ++i) {
+    if (!std::isdigit(static_cast<unsigned char>(text[i]))) continue;
+    char* after = nullptr;
+    numbers.push_back(std::strtod(text.c_str() + i, &after));
+    i = static_cast<std::size_t>(after - text.c_str());
+  }
+  return numbers;
+}
+
+}  // namespace
+
+void expectEveryPairTaken(const std::string& node_log, std::size_t pairs) {
+  const std::string log = readFile(node_log);
+  // "camera silent after C colour and D depth images (L colour lost before the node): P pairs,
+  // B dropped in the node's buffer, U images unpaired" (the last such line).
+  const std::vector<double> n = numbersAfter(log, "camera silent after ");
+  ASSERT_EQ(n.size(), 6u) << node_log << ":\n" << log;
+  const double expected = static_cast<double>(pairs);
+  EXPECT_EQ(n[3], expected) << "pairs taken, of the bag's " << pairs << ":\n" << log;
+  EXPECT_EQ(n[2], 0) << "colour images lost before the node:\n" << log;
+  EXPECT_EQ(n[4], 0) << "pairs dropped in the node's buffer:\n" << log;
+}
+
+void expectEveryFrameMapped(const std::string& stats_path, std::size_t pairs) {
+  const std::string stats = readFile(stats_path);
+  ASSERT_FALSE(stats.empty()) << stats_path;
+  EXPECT_EQ(jsonNumber(stats, "paired"), static_cast<double>(pairs)) << stats;
+  EXPECT_EQ(jsonNumber(stats, "frames_processed"), static_cast<double>(pairs)) << stats;
+  for (const char* none : {"color_lost", "buffer_dropped", "frames_dropped", "frames_skipped",
+                           "session_keyframes_dropped"})
+    EXPECT_EQ(jsonNumber(stats, none), 0) << none << " in " << stats;
 }
 
 std::string sharedBag(const std::string& tum_name, const std::string& options,

@@ -31,16 +31,36 @@ class Roscore {
   std::unique_ptr<Process> process_;
 };
 
+// How a bag is played into a node, and how the node takes it.
+enum class Pace {
+  // At the recorded rate, into a live node, as a camera sends: a node that falls behind drops
+  // frames, and how many depends on the machine (bench/ros_node_drops.sh). For tests of what a
+  // live node does, not of what it maps.
+  kRecorded,
+  // Into a lossless node (~lossless), the player waiting for it (rgbdmap-play, by the node's
+  // ~intake): at the recorded rate when the node keeps up, slower when it does not, and
+  // nothing dropped either way. For tests that judge the map.
+  kNode,
+};
+
 // rgbdmap_node's command line writing into `dir` (map.pcd, stats.json; maps every second), in
-// namespace `ns` with its own map frame (ns/map) when given.
-std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns);
-// rosbag play at the recorded rate, once the node subscribed (no image lost to a late
-// connection); `ns` prefixes the topics, as for a second robot.
-std::unique_ptr<Process> play(const std::string& bag, const std::string& ns,
-                              const std::string& log);
+// namespace `ns` with its own map frame (ns/map) when given; lossless for Pace::kNode.
+std::vector<std::string> nodeArgs(const std::string& dir, const std::string& ns,
+                                  Pace pace = Pace::kRecorded);
+// The bag played once the node subscribed (no image lost to a late connection), at `pace` (the
+// node must have been started with it); `ns` prefixes the topics, as for a second robot.
+std::unique_ptr<Process> play(const std::string& bag, const std::string& ns, const std::string& log,
+                              Pace pace = Pace::kRecorded);
 // The node took every image played: after the bag ends its last images are paired, and the
 // camera is reported silent (the pipeline checkpoints and waits for it).
 bool waitUntilSilent(const std::string& node_log);
+// What a lossless node must have done before its map is judged, whatever the machine's speed:
+// taken each of the bag's `pairs` pairs of images, none lost on the way or dropped (from the
+// line its node logs when the images stop: also for a node killed afterwards) ...
+void expectEveryPairTaken(const std::string& node_log, std::size_t pairs);
+// ... and, from its counters at exit, mapped each one (none dropped from the queue, none
+// skipped) and made a map piece of every keyframe for its session stream.
+void expectEveryFrameMapped(const std::string& stats_path, std::size_t pairs);
 
 // A test with a roscore of its own (in a fresh folder, freshDir()), this process a ROS node
 // ("rgbdmap_test_consumer") spinning on two threads.
@@ -57,5 +77,6 @@ class RosTest : public ::testing::Test {
 std::string nodeBinary();
 std::string mergerBinary();
 std::string tum2bagBinary();
+std::string playBinary();
 
 }  // namespace rgbdmap::test

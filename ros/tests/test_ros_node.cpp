@@ -27,11 +27,12 @@
 namespace rgbdmap::test {
 namespace {
 
-// How many points the map must have: the release build maps the bag's whole view; a sanitizer
-// build maps several times slower than the bag plays, so there the node drops most frames, as a
-// live camera's mapper would, and only some map is asked for. How many frames a node drops at
-// the recorded rate depends on the machine's load: that is measured in bench/ros_node_drops.sh,
-// and these tests check that every frame is accounted for instead.
+// Tests that judge what the node maps play their bag losslessly (Pace::kNode: the player waits
+// for the node), so that the node maps every frame on a slow, busy machine too. The release
+// build judges the map; a sanitizer build, several times slower, checks the flow and asks for
+// some map only. Tests of the live node play at the recorded rate: how many frames it drops
+// depends on the machine's load (measured in bench/ros_node_drops.sh), so they check that every
+// frame is accounted for and ask for some map, not for how much.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 constexpr bool kRealTime = false;
 #else
@@ -109,17 +110,19 @@ void expectEveryFrameAccountedFor(const std::string& stats_path, double pairs_in
 
 class RosNode : public RosTest {
  protected:
-  // Runs the node with `params` (and ~stats: dir_/stats.json) while fr1/xyz's bag plays at the
-  // recorded rate, stops it once it has gone quiet, and returns its log. A node started from a
-  // saved session: a sanitizer build drops most frames at the recorded rate and may never
-  // recognise the saved map, which ends the run with exit 1 (said in the log); a release build
-  // must exit 0.
+  // Runs the node with `params` (and ~stats: dir_/stats.json), lossless, while fr1/xyz's bag
+  // plays at the pace it keeps (what it maps then does not depend on the machine's speed), stops
+  // it once it has gone quiet, checks that it took and mapped every pair, and returns its log. A
+  // node started from a saved session must exit 0 in a release build; a sanitizer build is not
+  // judged on what it recognises (exit 1 when it never recognised the saved map, said in the
+  // log).
   std::string runNodeFromSavedMap(std::vector<std::string> params) {
     const std::string node_log = dir_ + "/node.log";
-    params.insert(params.begin(), {nodeBinary(), "_stats:=" + dir_ + "/stats.json"});
+    params.insert(params.begin(),
+                  {nodeBinary(), "_stats:=" + dir_ + "/stats.json", "_lossless:=true"});
     Process node(params, node_log);
-    auto player = play(sharedBag(kXyz), "", dir_ + "/play.log");
-    EXPECT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+    auto player = play(sharedBag(kXyz), "", dir_ + "/play.log", Pace::kNode);
+    EXPECT_EQ(player->wait(120), 0) << readFile(dir_ + "/play.log");
     EXPECT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
     node.signal(SIGINT);
     const int code = node.wait(60);
@@ -129,18 +132,22 @@ class RosNode : public RosTest {
     else
       EXPECT_TRUE(code == 0 || (code == 1 && log.find("never recognised") != std::string::npos))
           << log;
+    expectEveryPairTaken(node_log, 32);
+    expectEveryFrameMapped(dir_ + "/stats.json", 32);
     return log;
   }
 };
 
-TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
+// The node maps a bag (every frame: the player waits for it) and serves what it maps: the map
+// while mapping, the grid, poses, and its services.
+TEST_F(RosNode, MapsABagPlayedAtThePaceItKeeps) {
   const std::string bag = sharedBag(kRpy);
   Received got;
   got.subscribe(*nh_, "");
   const std::string node_log = dir_ + "/node.log";
-  Process node(nodeArgs(dir_, ""), node_log);
-  auto player = play(bag, "", dir_ + "/play.log");
-  ASSERT_EQ(player->wait(60), 0) << readFile(dir_ + "/play.log");
+  Process node(nodeArgs(dir_, "", Pace::kNode), node_log);
+  auto player = play(bag, "", dir_ + "/play.log", Pace::kNode);
+  ASSERT_EQ(player->wait(120), 0) << readFile(dir_ + "/play.log");
   // The map arrives while mapping, not only at the end.
   ASSERT_TRUE(waitUntil([&] { return got.largest_map.load() >= kMapPoints; }, 30))
       << got.largest_map.load() << " points\n"
@@ -164,6 +171,7 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
 
   // Ctrl-C: the final map, exit 0.
   ASSERT_TRUE(waitUntilSilent(node_log)) << readFile(node_log);
+  expectEveryPairTaken(node_log, 100);
   const std::uint64_t maps_before = got.maps.load();
   node.signal(SIGINT);
   ASSERT_EQ(node.wait(60), 0) << readFile(node_log);
@@ -178,16 +186,15 @@ TEST_F(RosNode, MapsABagPlayedAtTheRecordedRate) {
     EXPECT_GT(got.grid_free.load(), 100u);
     EXPECT_GT(got.grid_occupied.load(), 10u);
   }
-  // A pose for every posed frame (tracked, or relocalised after a loss: a node that drops frames
-  // can lose track) at most, but those of the first frames may go out before this consumer's
-  // connection to the new publisher is made (ROS drops them: the topic is not latched), and how
-  // many depends on the machine's load.
+  // A pose for every posed frame (tracked, or relocalised after a loss) at most, but those of
+  // the first frames may go out before this consumer's connection to the new publisher is made
+  // (ROS drops them: the topic is not latched), and how many depends on the machine's load.
   const std::string stats = readFile(dir_ + "/stats.json");
   const double tracked =
       jsonNumber(stats, "frames_tracked") + jsonNumber(stats, "frames_relocalised");
   EXPECT_LE(static_cast<double>(got.poses.load()), tracked) << stats;
   EXPECT_GT(got.poses.load(), 0u);
-  expectEveryFrameAccountedFor(dir_ + "/stats.json", 100);
+  expectEveryFrameMapped(dir_ + "/stats.json", 100);
 }
 
 // What a fleet's merger receives: the node's session as it grows, on ~session/graph and
@@ -286,6 +293,9 @@ TEST_F(RosNode, StreamsItsSessionWithinItsByteBudget) {
   EXPECT_NE(readFile(node_log).find("session stream: "), std::string::npos);
 }
 
+// Live nodes (bags at the recorded rate, as cameras send them): how much each maps depends on
+// the machine, so each map is asked to arrive intact and hold points, and every frame to be
+// accounted for; how much a node maps is judged losslessly (MapsABagPlayedAtThePaceItKeeps).
 TEST_F(RosNode, TwoRobotsAndAConsumerOnOneMaster) {
   Received robot1, robot2;
   robot1.subscribe(*nh_, "/robot1");
@@ -298,9 +308,9 @@ TEST_F(RosNode, TwoRobotsAndAConsumerOnOneMaster) {
   auto play2 = play(sharedBag(kXyz), "robot2", dir_ + "/robot2/play.log");
   ASSERT_EQ(play1->wait(60), 0) << readFile(dir_ + "/robot1/play.log");
   ASSERT_EQ(play2->wait(60), 0) << readFile(dir_ + "/robot2/play.log");
-  ASSERT_TRUE(waitUntil([&] { return robot1.largest_map.load() >= kMapPoints; }, 30))
+  ASSERT_TRUE(waitUntil([&] { return robot1.largest_map.load() > 0; }, 30))
       << readFile(dir_ + "/robot1/node.log");
-  ASSERT_TRUE(waitUntil([&] { return robot2.largest_map.load() >= kMapPoints / 10; }, 30))
+  ASSERT_TRUE(waitUntil([&] { return robot2.largest_map.load() > 0; }, 30))
       << readFile(dir_ + "/robot2/node.log");
   EXPECT_TRUE(robot1.map_intact.load());
   EXPECT_TRUE(robot2.map_intact.load());
@@ -317,8 +327,8 @@ TEST_F(RosNode, TwoRobotsAndAConsumerOnOneMaster) {
   expectEveryFrameAccountedFor(dir_ + "/robot1/stats.json", 100);
   expectEveryFrameAccountedFor(dir_ + "/robot2/stats.json", 32);
   // Each node wrote its final map.
-  EXPECT_GE(loadMap(dir_ + "/robot1/map.pcd").size(), kMapPoints);
-  EXPECT_GE(loadMap(dir_ + "/robot2/map.pcd").size(), kMapPoints / 10);
+  EXPECT_GT(loadMap(dir_ + "/robot1/map.pcd").size(), 0u);
+  EXPECT_GT(loadMap(dir_ + "/robot2/map.pcd").size(), 0u);
 }
 
 TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
@@ -353,7 +363,6 @@ TEST_F(RosNode, LocalisesInASavedMapAndPublishesPosesInItsFrame) {
   EXPECT_FALSE(std::filesystem::exists(dir_ + "/localised.pcd"));
   EXPECT_EQ(readFile(dir_ + "/map.pcd"), map_before);
   const std::string stats = readFile(dir_ + "/stats.json");
-  expectEveryFrameAccountedFor(dir_ + "/stats.json", 32);
   if (!kRealTime) return;
   EXPECT_NE(log.find("localisation: placed in the saved map"), std::string::npos) << log;
   EXPECT_GT(jsonNumber(stats, "keyframes_placed"), 0) << stats;
@@ -383,7 +392,6 @@ TEST_F(RosNode, ContinuesASavedMapIntoOneMapAndSession) {
   EXPECT_NE(log.find("continuing " + dir_ + "/map.session"), std::string::npos) << log;
   EXPECT_EQ(readFile(dir_ + "/map.pcd"), map_before);
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/more.pcd")) << log;
-  expectEveryFrameAccountedFor(dir_ + "/stats.json", 32);
   if (!kRealTime) return;
   EXPECT_NE(log.find("continuing: keyframe"), std::string::npos) << log;
   // One session of both runs: it holds the saved keyframes and the node's.

@@ -30,6 +30,11 @@ struct NodeSettings {
   // until it recognises a saved place, then in the saved map's, and ~out gets one map and one
   // session of both ("" = map from nothing). No OctoMap (a session keeps no free space).
   std::string continue_from;
+  // ~lossless: for a bag played into the node: every image is kept until mapped (nothing dropped
+  // when mapping falls behind), the run is a replay's (its map does not depend on the machine's
+  // speed), and ~intake tells the player how far the node has got, so that rgbdmap-play waits
+  // for it. A camera does not wait: leave it off for one.
+  bool lossless = false;
 };
 
 NodeSettings readNodeSettings(const ros::NodeHandle& private_nh);

@@ -20,12 +20,14 @@ namespace rgbdmap {
 // `interval` seconds from a thread of its own, within the stream's byte budget. Mapping never
 // waits for it: it reads the graph under the loop closer's lock, as a checkpoint does, and a
 // keyframe is copied into a short queue (the oldest dropped when full) for this thread to make
-// a map piece of.
+// a map piece of. Lossless (a bag replayed), a full queue is waited for instead: every keyframe
+// then becomes a piece, however slow this thread is.
 class SessionPublisher {
  public:
   struct Options {
     double interval = 0.5;  // seconds between looks at the graph
     SessionStream::Options stream;
+    bool lossless = false;
   };
   SessionPublisher(ros::NodeHandle& private_nh, Options options);
   ~SessionPublisher();
@@ -39,6 +41,8 @@ class SessionPublisher {
   void addKeyframe(const Frame& keyframe);
   // What went out so far (after the last attach(nullptr): final).
   SessionStream::Totals totals() const;
+  // Keyframes dropped from the full queue, never sent (none when lossless).
+  std::uint64_t keyframesDropped() const;
   std::uint64_t run() const { return run_; }
 
  private:
@@ -51,7 +55,8 @@ class SessionPublisher {
   ros::Publisher graph_pub_, places_pub_, pieces_pub_;
   // Keyframes copied on the tracking thread, for the stream (their own lock: the tracking thread
   // never waits for a send), and a few buffers to copy into.
-  std::mutex incoming_mutex_;
+  mutable std::mutex incoming_mutex_;
+  std::condition_variable room_;  // lossless: the queue has room again (or the graph went)
   std::deque<Frame> incoming_;
   std::vector<Frame> spare_;
   std::uint64_t pieces_dropped_ = 0;

@@ -22,13 +22,20 @@ namespace rgbdmap {
 // (remappable the ROS way). Callbacks (a spinner thread) only pair images by stamp and keep the
 // newest few pairs; the capture thread converts them in read(). A live source: when mapping
 // falls behind the oldest pairs are dropped and counted, never waited for.
+// Lossless (a bag played into the node), every pair is kept until mapping takes it and the run
+// is a replay's: ~intake (std_msgs/UInt64MultiArray, latched: colour images received, depth
+// images received, pairs taken, the colour stamp of the last pair taken in ns) tells the player
+// (rgbdmap-play) how far the node has got, so that it never runs far ahead of mapping and leaves
+// once the node has received all it sent. The newest images are paired when the player is gone
+// (the end of the bag), never after a mere pause.
 class TopicSource : public FrameSource {
  public:
   static constexpr const char* kColorTopic = "camera/rgb/image_color";
   static constexpr const char* kDepthTopic = "camera/depth/image";
   static constexpr const char* kCameraInfoTopic = "camera/rgb/camera_info";
 
-  TopicSource(ros::NodeHandle& nh, const Config& config, const std::atomic<bool>& stop);
+  TopicSource(ros::NodeHandle& nh, const Config& config, const std::atomic<bool>& stop,
+              bool lossless = false);
   // Unsubscribes first (waiting for a callback in progress), before the members it uses go.
   ~TopicSource() override { shutdown(); }
 
@@ -41,7 +48,7 @@ class TopicSource : public FrameSource {
 
   ReadStatus read(Frame& frame) override;
   CameraIntrinsics intrinsics() const override { return camera_; }
-  bool isLive() const override { return true; }
+  bool isLive() const override { return !lossless_; }
   bool providesPoses() const override { return false; }
   std::string describe() const override;
   std::uint64_t skipped() const override;
@@ -69,11 +76,20 @@ class TopicSource : public FrameSource {
   void onCameraInfo(const sensor_msgs::CameraInfo::ConstPtr& msg);
   void takePairs();  // with mutex_ held
   bool waitForPair(double timeout_s);
-  bool flushPairs();  // pairs what is left, as at the end of a stream
+  // For read(): until a pair is ready (true), or the input is silent (false).
+  bool waitForNextPair();
+  bool inputEnded() const;  // no publisher left on the image topics (the player has gone)
+  void publishIntake();     // with mutex_ held
+  bool flushPairs();        // pairs what is left, as at the end of a stream
   void skip(const std::string& reason, const std::string& detail);
+  // What came so far, said when the images stop (a bag played to its end): the node's summary
+  // at exit says the same, but a node may be stopped without one.
+  void logCounts() const;
 
   const Config config_;
   const std::atomic<bool>& stop_;
+  const bool lossless_;
+  ros::Publisher intake_pub_;  // ~intake (lossless)
   std::string color_topic_, depth_topic_, info_topic_;
   ros::Subscriber color_sub_, depth_sub_, info_sub_;
   CameraIntrinsics camera_;
@@ -88,6 +104,8 @@ class TopicSource : public FrameSource {
   std::string camera_frame_;
   Counts counts_;
   std::optional<std::uint32_t> last_color_seq_;
+  std::uint64_t taken_ = 0;  // pairs read() took
+  ros::Time last_taken_;     // the colour stamp of the last of them
   std::uint64_t skipped_ = 0;
   SkipReasons reasons_;
 };
