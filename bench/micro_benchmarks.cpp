@@ -17,6 +17,7 @@
 #include "rgbdmap/base/png_decoder.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/depth_filter.hpp"
 #include "rgbdmap/mapping/depth_smoother.hpp"
@@ -24,8 +25,7 @@
 #include "rgbdmap/mapping/mesh_extractor.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
-#include "rgbdmap/runtime/config.hpp"
-#include "rgbdmap/runtime/map_piece.hpp"
+#include "rgbdmap/sessions/map_piece.hpp"
 
 namespace {
 

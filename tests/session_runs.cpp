@@ -12,7 +12,7 @@
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap::test {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "rgbdmap/capture/trajectory.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 
 namespace rgbdmap::test {
 

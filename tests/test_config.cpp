@@ -3,7 +3,7 @@
 #include <fstream>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -7,7 +7,7 @@
 
 #include <iostream>
 
-#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 

@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
 #include "rgbdmap/slam/motion.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"

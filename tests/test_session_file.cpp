@@ -12,7 +12,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
-#include "rgbdmap/runtime/config.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
-#include "rgbdmap/runtime/session_merge.hpp"
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
+#include "rgbdmap/sessions/session_merge.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 

@@ -12,16 +12,16 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
 #include "rgbdmap/ros/topic_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/pose_source.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 
 namespace {

@@ -4,7 +4,6 @@
 #include <exception>
 
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/pipeline.hpp"
 
 namespace rgbdmap {
 namespace {

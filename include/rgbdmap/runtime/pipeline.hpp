@@ -6,31 +6,14 @@
 
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
+#include "rgbdmap/runtime/run_thread.hpp"
 
 namespace rgbdmap {
 
 struct Session;
-
-// Requests from outside the pipeline (signal thread, tests). Only atomics: safe from anywhere.
-struct RunControl {
-  std::atomic<bool> stop{false};      // SIGINT/SIGTERM: stop capture, drain, final save
-  std::atomic<bool> snapshot{false};  // SIGUSR1: write a checkpoint now
-};
-
-struct PipelineOutputs {
-  std::string map_path = "map.pcd";
-  std::string trajectory_path;        // keyframe poses, TUM format ("" = none)
-  std::string frame_trajectory_path;  // the pose of every frame, TUM format ("" = none)
-  std::string config_path;            // effective configuration ("" = none)
-  std::string mesh_path;     // triangle mesh (binary PLY) written with every map save ("" = none)
-  std::string grid_path;     // occupancy grid (PGM + YAML) written with every map save ("" = none)
-  std::string octomap_path;  // binary OctoMap written with every map save ("" = none)
-  std::string session_path;  // MAP.session/ written with every map save ("" = none)
-  bool status_line = true;
-  MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
-};
 
 // The running system: a capture thread reads the source into a bounded queue, a tracking thread
 // gives every frame its pose, picks keyframes and triggers checkpoints, a fusion thread fuses the

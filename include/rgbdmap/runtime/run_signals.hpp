@@ -6,7 +6,7 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/runtime/pipeline.hpp"
+#include "rgbdmap/runtime/run_thread.hpp"
 
 namespace rgbdmap {
 

@@ -6,12 +6,12 @@
 #include <string>
 
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/config/run_options.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/frame_tracker.hpp"
 #include "rgbdmap/runtime/frames_before_placement.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
-#include "rgbdmap/runtime/run_options.hpp"
 #include "rgbdmap/runtime/run_thread.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 

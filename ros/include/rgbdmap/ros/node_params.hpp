@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 namespace rgbdmap {
 

@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/ply_file.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 
 #include <cstring>
 #include <fstream>
@@ -7,7 +7,8 @@
 #include <vector>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/base/file_io.hpp"
+#include "rgbdmap/map_files/atomic_write.hpp"
 
 namespace rgbdmap {
 namespace {
