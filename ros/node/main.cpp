@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 #include <std_srvs/Trigger.h>
 
+#include <algorithm>
 #include <fstream>
 #include <thread>
 
@@ -20,9 +21,8 @@
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/pose_source.hpp"
+#include "rgbdmap/runtime/run_mode.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
-#include "rgbdmap/sessions/session_file.hpp"
-#include "rgbdmap/tracking/pose_provider.hpp"
 
 namespace {
 
@@ -74,6 +74,25 @@ std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c
   return out;
 }
 
+// How the node names its parameters in a refusal (chooseRunMode): "parameter /rgbdmap/localise",
+// and config keys as private parameters ("pose/source", set as _pose/source:=odometry).
+OptionNames nodeNames(const ros::NodeHandle& pnh) {
+  OptionNames names;
+  names.out = "~out";
+  names.localise = "parameter " + pnh.resolveName("localise");
+  names.continue_from = "parameter " + pnh.resolveName("continue");
+  names.grid = "~grid";
+  names.octomap = "~octomap";
+  names.key = [](std::string key) {
+    std::replace(key.begin(), key.end(), '.', '/');
+    return key;
+  };
+  names.set = [key = names.key](const std::string& k, const std::string& value) {
+    return "_" + key(k) + ":=" + value;
+  };
+  return names;
+}
+
 int runNode(RunControl& control, RunSignals& signals) {
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -82,20 +101,11 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.loadPreset(settings.config);
   applyPrivateParams(pnh, config);
   checkOutputFolder(settings.out, "~out");
-  // Read before waiting for the camera: a session that cannot be used stops the node at once.
-  const std::shared_ptr<const Session> localise_in =
-      settings.localise.empty() ? nullptr
-                                : openSessionToStartFrom(settings.localise, settings.out,
-                                                         pnh.resolveName("localise"), true);
-  const std::shared_ptr<const Session> continued =
-      settings.continue_from.empty() ? nullptr
-                                     : openSessionToStartFrom(settings.continue_from, settings.out,
-                                                              pnh.resolveName("continue"), false);
-  if ((localise_in || continued) && config.pose.source == "auto") config.pose.source = "odometry";
-  if (continued && !config.loop.enabled)
-    throw InputError(pnh.resolveName("continue") +
-                     ": goes on from the saved map with loop closure (its places and graph); "
-                     "loop/enabled=false turns it off");
+  // Chosen before waiting for the camera: a session that cannot be used stops the node at once.
+  const std::shared_ptr<const RunMode> mode =
+      chooseRunMode({settings.out, settings.localise, settings.continue_from, false,
+                     !settings.grid.empty(), settings.octomap_given},
+                    config, nodeNames(pnh));
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.
   ros::AsyncSpinner image_spinner(1);
@@ -110,11 +120,7 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.pose.source = resolvePoseSource(
       config.pose.source, topics.providesPoses(),
       "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
-  if ((localise_in || continued) && !tracksKeyframes(config.pose, config.tracking))
-    throw InputError(pnh.resolveName(localise_in ? "localise" : "continue") +
-                     ": needs the camera's odometry (pose/source=odometry, tracking/method=dense)");
-  PipelineOutputs outputs =
-      localise_in ? localisationOutputs(settings.out) : outputsBeside(settings.out);
+  PipelineOutputs outputs = mode->outputs(settings.out, "");
   outputs.grid_path = settings.grid;
   outputs.octomap_path = settings.octomap;
   if (!signals.runStarts({temporaryFiles(outputs)})) {
@@ -135,16 +141,14 @@ int runNode(RunControl& control, RunSignals& signals) {
   publish.up = config.up;
   publish.grid = config.grid;
   // Only a mapping run has a session to stream (localising adds nothing to the saved one).
-  publish.session.interval = localise_in ? 0.0 : settings.session_interval;
+  publish.session.interval = mode->maps() ? settings.session_interval : 0.0;
   publish.session.stream.bytes_per_second = settings.session_rate;
   RosPublisher publisher(pnh, publish);
 
   outputs.status_line = false;
   outputs.publisher = &publisher;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
-  Pipeline pipeline(
-      config, std::move(source), outputs, localise_in ? localise_in : continued,
-      localise_in ? Pipeline::SessionUse::kLocalise : Pipeline::SessionUse::kContinue);
+  Pipeline pipeline(config, std::move(source), outputs, mode);
 
   // Services on a queue and thread of their own: a call waits for its checkpoint without
   // holding up the image callbacks.
@@ -154,7 +158,7 @@ int runNode(RunControl& control, RunSignals& signals) {
   const auto handler = [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
     // Localising, a save writes the trajectory alone.
     return writeMapNow(control, pipeline.stats(),
-                       localise_in ? outputs.frame_trajectory_path : settings.out, response);
+                       mode->maps() ? settings.out : outputs.frame_trajectory_path, response);
   };
   ros::ServiceServer save_map =
       service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
@@ -180,22 +184,15 @@ int runNode(RunControl& control, RunSignals& signals) {
         });
   ros::AsyncSpinner service_spinner(1, &service_queue);
   service_spinner.start();
-  if (localise_in)
-    spdlog::info("localising in {}: publishing {} and TF {} -> {} in the saved map's frame",
-                 settings.localise, pnh.resolveName("pose"), publish.map_frame,
-                 publish.camera_frame);
-  else if (continued)
-    spdlog::info(
-        "continuing {}: publishing {}, {} and {}, TF {} -> {} (in the saved map's frame "
-        "once recognised); services {} and {}",
-        settings.continue_from, pnh.resolveName("map"), pnh.resolveName("grid"),
-        pnh.resolveName("pose"), publish.map_frame, publish.camera_frame, save_map.getService(),
-        snapshot.getService());
-  else
-    spdlog::info("mapping: publishing {}, {} and {}, TF {} -> {}; services {}, {} and {}",
-                 pnh.resolveName("map"), pnh.resolveName("grid"), pnh.resolveName("pose"),
-                 publish.map_frame, publish.camera_frame, save_map.getService(),
-                 snapshot.getService(), save_octomap.getService());
+  // What the node publishes (localising: the pose alone) and the services that write the map.
+  const std::string published = mode->maps()
+                                    ? fmt::format("{}, {} and {}", pnh.resolveName("map"),
+                                                  pnh.resolveName("grid"), pnh.resolveName("pose"))
+                                    : pnh.resolveName("pose");
+  std::string services = save_map.getService() + ", " + snapshot.getService();
+  if (!settings.octomap.empty()) services += ", " + save_octomap.getService();
+  spdlog::info("{}: publishing {}, TF {} -> {}{}", mode->name(), published, publish.map_frame,
+               publish.camera_frame, mode->maps() ? "; services " + services : "");
 
   const int code = pipeline.run(control);
   topics.shutdown();

@@ -1,6 +1,5 @@
 #include "rgbdmap/runtime/output_files.hpp"
 
-#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -9,7 +8,6 @@
 #include "rgbdmap/map_files/atomic_write.hpp"
 #include "rgbdmap/map_files/grid_file.hpp"
 #include "rgbdmap/map_files/trajectory_stream.hpp"
-#include "rgbdmap/sessions/session_file.hpp"
 
 namespace rgbdmap {
 
@@ -72,31 +70,6 @@ void checkOutputFolder(const std::string& path, const std::string& option) {
                      (ec ? " (" + ec.message() + ")" : ""));
   if (::access(folder.c_str(), W_OK) != 0)
     throw InputError(option + " " + path + ": the folder " + folder.string() + " is not writable");
-}
-
-std::shared_ptr<const Session> openSessionToStartFrom(const std::string& path,
-                                                      const std::string& map_path,
-                                                      const std::string& option, bool localise) {
-  namespace fs = std::filesystem;
-  std::string saved = path;
-  while (saved.size() > 1 && saved.back() == '/') saved.pop_back();
-  std::error_code ec;
-  if (fs::weakly_canonical(sessionPathOf(map_path), ec) == fs::weakly_canonical(saved, ec))
-    throw InputError(option + " " + path + ": the run's files (" + map_path +
-                     ") would be written beside the saved map's; give it its own name (e.g. " +
-                     (localise ? "localised.pcd: its trajectory is localised_trajectory.txt)"
-                               : "continued.pcd: the saved map stays as it was)"));
-  Session read = readSession(path);
-  if (localise) read.keyframes = {};
-  auto session = std::make_shared<const Session>(std::move(read));
-  std::size_t places = 0;
-  for (const auto& place : session->graph.places) places += place ? 1 : 0;
-  spdlog::info("{} {}: {} keyframes, {} places{} (made by {})",
-               localise ? "localising in" : "continuing", path, session->graph.keyframes.size(),
-               places,
-               localise ? "" : fmt::format(", {} kept keyframes", session->keyframes.size()),
-               session->created_by);
-  return session;
 }
 
 }  // namespace rgbdmap

@@ -7,7 +7,6 @@
 namespace rgbdmap {
 
 class MapPublisher;
-struct Session;
 
 // The files a mapping run writes and the temporary files their writers keep while writing, named
 // by one rule for the writers, for the front doors and for the second Ctrl-C that removes them.
@@ -50,13 +49,5 @@ std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs);
 // once than to find out at the first checkpoint, after mapping for a while. Throws InputError
 // naming `option` ("--out", "~out") and the path.
 void checkOutputFolder(const std::string& path, const std::string& option);
-
-// The session a run starts from (--localise or --continue, ~localise: `option`), read whole,
-// after checking that the run's own files, named after `map_path`, would not land beside the
-// saved map's (which stays as it was). Localising keeps only the graph and the places (the kept
-// keyframes' images are for fusion). Throws InputError naming the option and the path.
-std::shared_ptr<const Session> openSessionToStartFrom(const std::string& path,
-                                                      const std::string& map_path,
-                                                      const std::string& option, bool localise);
 
 }  // namespace rgbdmap
