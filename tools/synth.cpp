@@ -18,11 +18,48 @@ bool parseRoomSize(const std::string& text, Eigen::Vector3d& size) {
   double x = 0, y = 0, z = 0;
   char sep1 = 0, sep2 = 0;
   std::istringstream in(text);
-  if (!(in >> x >> sep1 >> y >> sep2 >> z) || sep1 != 'x' || sep2 != 'x' || !in.eof())
-    return false;
+  if (!(in >> x >> sep1 >> y >> sep2 >> z) || sep1 != 'x' || sep2 != 'x' || !in.eof()) return false;
   if (!(x >= 3.0 && y >= 3.0 && z >= 2.0 && x <= 100.0 && y <= 100.0 && z <= 20.0)) return false;
   size = Eigen::Vector3d(x, y, z);
   return true;
+}
+
+// What `synth` was asked.
+struct SynthOptions {
+  std::string out, scene, room;
+  bool no_noise = false;
+  SyntheticSequenceOptions sequence;
+};
+
+// Writes the sequence `o` asks for and says where (`noise_seed_given`: --noise-seed was given,
+// else the noise takes --seed).
+int synth(const SynthOptions& o, bool noise_seed_given) {
+#if defined(__SANITIZE_THREAD__)
+  // OpenCV's parallel loops run on TBB's workers, which are not instrumented: the sanitizer
+  // cannot see them finish and would report every image they wrote. Serial in that build.
+  cv::setNumThreads(1);
+#endif
+  SyntheticSequenceOptions options = o.sequence;
+  options.noise = !o.no_noise;
+  if (!noise_seed_given) options.noise_seed = options.seed;
+  Eigen::Vector3d size(5.0, 4.0, 2.8);
+  if (!o.room.empty()) parseRoomSize(o.room, size);
+  const SyntheticScene scene =
+      o.scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o.scene);
+  if (o.out.find("freiburg") != std::string::npos)
+    std::fprintf(stderr,
+                 "rgbdmap synth: warning: '%s' contains 'freiburg', so rgbdmap would pick a "
+                 "TUM freiburg camera preset for it; this sequence uses the default "
+                 "intrinsics (pass --config default when mapping it)\n",
+                 o.out.c_str());
+  const SyntheticSequenceSummary summary = writeSyntheticSequence(o.out, scene, options);
+  std::printf(
+      "wrote %d frames to %s in %.1f s (%.1f%% of pixels with depth, %zu visible surface "
+      "samples)\nmap it:   rgbdmap --source tum:%s --out map.pcd --rate max\nscore it: "
+      "rgbdmap evaluate map map.pcd --scene %s\n",
+      summary.frames, o.out.c_str(), summary.seconds, 100.0 * summary.valid_depth_share,
+      summary.surface_points, o.out.c_str(), o.out.c_str());
+  return 0;
 }
 
 }  // namespace
@@ -32,12 +69,7 @@ void addSynthCommand(CLI::App& app, Command& selected) {
       "synth",
       "write a synthetic RGB-D sequence (TUM layout) of a room with exact geometry: Kinect-like "
       "depth noise, ground truth, scene.yaml and visible_surface.pcd for `rgbdmap evaluate`");
-  struct Options {
-    std::string out, scene, room;
-    bool no_noise = false;
-    SyntheticSequenceOptions sequence;
-  };
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<SynthOptions>();
   cmd->add_option("-o,--out", o->out, "folder to write (created if missing)")->required();
   cmd->add_option("-n,--frames", o->sequence.frames, "number of frames")
       ->capture_default_str()
@@ -106,34 +138,7 @@ void addSynthCommand(CLI::App& app, Command& selected) {
       ->capture_default_str()
       ->check(CLI::Range(0, 9));
   cmd->callback([o, noise_seed, &selected] {
-    selected = [o, noise_seed] {
-#if defined(__SANITIZE_THREAD__)
-      // OpenCV's parallel loops run on TBB's workers, which are not instrumented: the sanitizer
-      // cannot see them finish and would report every image they wrote. Serial in that build.
-      cv::setNumThreads(1);
-#endif
-      SyntheticSequenceOptions options = o->sequence;
-      options.noise = !o->no_noise;
-      if (noise_seed->count() == 0) options.noise_seed = options.seed;
-      Eigen::Vector3d size(5.0, 4.0, 2.8);
-      if (!o->room.empty()) parseRoomSize(o->room, size);
-      const SyntheticScene scene =
-          o->scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o->scene);
-      if (o->out.find("freiburg") != std::string::npos)
-        std::fprintf(stderr,
-                     "rgbdmap synth: warning: '%s' contains 'freiburg', so rgbdmap would pick a "
-                     "TUM freiburg camera preset for it; this sequence uses the default "
-                     "intrinsics (pass --config default when mapping it)\n",
-                     o->out.c_str());
-      const SyntheticSequenceSummary summary = writeSyntheticSequence(o->out, scene, options);
-      std::printf(
-          "wrote %d frames to %s in %.1f s (%.1f%% of pixels with depth, %zu visible surface "
-          "samples)\nmap it:   rgbdmap --source tum:%s --out map.pcd --rate max\nscore it: "
-          "rgbdmap evaluate map map.pcd --scene %s\n",
-          summary.frames, o->out.c_str(), summary.seconds, 100.0 * summary.valid_depth_share,
-          summary.surface_points, o->out.c_str(), o->out.c_str());
-      return 0;
-    };
+    selected = [o, noise_seed] { return synth(*o, noise_seed->count() > 0); };
   });
 }
 

@@ -93,6 +93,92 @@ OptionNames nodeNames(const ros::NodeHandle& pnh) {
   return names;
 }
 
+// What the node publishes, and where: its frames (the camera's from its images unless given),
+// how often, and the session stream (only a mapping run has one: localising adds nothing).
+RosPublisher::Options publisherOptions(const NodeSettings& settings, const TopicSource& topics,
+                                       const Config& config, const RunMode& mode) {
+  RosPublisher::Options publish;
+  publish.map_frame = settings.map_frame;
+  publish.camera_frame = !settings.camera_frame.empty()  ? settings.camera_frame
+                         : !topics.cameraFrame().empty() ? topics.cameraFrame()
+                                                         : "camera_rgb_optical_frame";
+  if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
+    publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
+  publish.map_interval = settings.map_interval;
+  publish.grid_interval = settings.grid_interval;
+  publish.up = config.up;
+  publish.grid = config.grid;
+  publish.session.interval = mode.maps() ? settings.session_interval : 0.0;
+  publish.session.stream.bytes_per_second = settings.session_rate;
+  return publish;
+}
+
+// The node's services, on a queue and thread of their own: a call waits for its checkpoint
+// without holding up the image callbacks. ~save_map and ~snapshot write `saved` (the map;
+// localising, the trajectory alone), ~save_octomap the OctoMap, ~session/resend asks the session
+// stream to send everything again.
+class NodeServices {
+ public:
+  NodeServices(RunControl& control, const Pipeline& pipeline, RosPublisher& publisher,
+               const std::string& saved, const std::string& octomap)
+      : octomap_(octomap) {
+    nh_.setCallbackQueue(&queue_);
+    using Request = std_srvs::Trigger::Request;
+    using Response = std_srvs::Trigger::Response;
+    const auto save = [&control, &pipeline, saved](Request&, Response& response) {
+      return writeMapNow(control, pipeline.stats(), saved, response);
+    };
+    save_map_ = nh_.advertiseService<Request, Response>("save_map", save);
+    snapshot_ = nh_.advertiseService<Request, Response>("snapshot", save);
+    save_octomap_ = nh_.advertiseService<Request, Response>(
+        "save_octomap", [&control, &pipeline, octomap](Request&, Response& response) {
+          writeMapNow(control, pipeline.stats(), octomap, response);
+          if (response.success) response.message = octomap;
+          return true;
+        });
+    if (SessionPublisher* session = publisher.session())
+      resend_ = nh_.advertiseService<Request, Response>(
+          "session/resend", [session](Request&, Response& response) {
+            session->resend();
+            response.success = true;
+            response.message = "run " + std::to_string(session->run());
+            return true;
+          });
+    spinner_.start();
+  }
+  // The services that write the map (and the OctoMap, when one is written).
+  std::string describe() const {
+    return save_map_.getService() + ", " + snapshot_.getService() +
+           (octomap_.empty() ? "" : ", " + save_octomap_.getService());
+  }
+  void stop() { spinner_.stop(); }
+
+ private:
+  std::string octomap_;
+  ros::CallbackQueue queue_;
+  ros::NodeHandle nh_{"~"};
+  ros::ServiceServer save_map_, snapshot_, save_octomap_, resend_;
+  ros::AsyncSpinner spinner_{1, &queue_};
+};
+
+// What became of the camera's images, logged, and the run's statistics with the node's counts
+// written to `stats_file` ("" = none).
+void reportAtEnd(const TopicSource::Counts& counts, const RunStats& stats, RosPublisher& publisher,
+                 const std::string& stats_file) {
+  spdlog::info(
+      "rgbdmap_node: {} colour images received ({} lost before the node), {} pairs, {} dropped "
+      "by the node ({} in its buffer, {} in the queue), {} frames mapped, {} maps published",
+      counts.color_received, counts.color_lost, counts.paired,
+      counts.buffer_dropped + stats.frames_dropped.load(), counts.buffer_dropped,
+      stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
+  if (stats_file.empty()) return;
+  std::ofstream out(stats_file);
+  out << withNodeCounts(
+      stats.toJson(), counts, publisher.mapsPublished(),
+      publisher.session() ? publisher.session()->totals() : SessionStream::Totals{});
+  if (!out) spdlog::error("{}: cannot write statistics", stats_file);
+}
+
 int runNode(RunControl& control, RunSignals& signals) {
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -129,20 +215,7 @@ int runNode(RunControl& control, RunSignals& signals) {
     return 0;
   }
 
-  RosPublisher::Options publish;
-  publish.map_frame = settings.map_frame;
-  publish.camera_frame = !settings.camera_frame.empty()  ? settings.camera_frame
-                         : !topics.cameraFrame().empty() ? topics.cameraFrame()
-                                                         : "camera_rgb_optical_frame";
-  if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
-    publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
-  publish.map_interval = settings.map_interval;
-  publish.grid_interval = settings.grid_interval;
-  publish.up = config.up;
-  publish.grid = config.grid;
-  // Only a mapping run has a session to stream (localising adds nothing to the saved one).
-  publish.session.interval = mode->maps() ? settings.session_interval : 0.0;
-  publish.session.stream.bytes_per_second = settings.session_rate;
+  const RosPublisher::Options publish = publisherOptions(settings, topics, config, *mode);
   RosPublisher publisher(pnh, publish);
 
   outputs.status_line = false;
@@ -150,69 +223,22 @@ int runNode(RunControl& control, RunSignals& signals) {
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
   Pipeline pipeline(config, std::move(source), outputs, mode);
 
-  // Services on a queue and thread of their own: a call waits for its checkpoint without
-  // holding up the image callbacks.
-  ros::CallbackQueue service_queue;
-  ros::NodeHandle service_nh("~");
-  service_nh.setCallbackQueue(&service_queue);
-  const auto handler = [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-    // Localising, a save writes the trajectory alone.
-    return writeMapNow(control, pipeline.stats(),
-                       mode->maps() ? settings.out : outputs.frame_trajectory_path, response);
-  };
-  ros::ServiceServer save_map =
-      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-          "save_map", handler);
-  ros::ServiceServer snapshot =
-      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-          "snapshot", handler);
-  ros::ServiceServer save_octomap =
-      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-          "save_octomap", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-            writeMapNow(control, pipeline.stats(), settings.octomap, response);
-            if (response.success) response.message = settings.octomap;
-            return true;
-          });
-  ros::ServiceServer resend;
-  if (publisher.session())
-    resend = service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-        "session/resend", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-          publisher.session()->resend();
-          response.success = true;
-          response.message = "run " + std::to_string(publisher.session()->run());
-          return true;
-        });
-  ros::AsyncSpinner service_spinner(1, &service_queue);
-  service_spinner.start();
+  NodeServices services(control, pipeline, publisher,
+                        mode->maps() ? settings.out : outputs.frame_trajectory_path,
+                        settings.octomap);
   // What the node publishes (localising: the pose alone) and the services that write the map.
   const std::string published = mode->maps()
                                     ? fmt::format("{}, {} and {}", pnh.resolveName("map"),
                                                   pnh.resolveName("grid"), pnh.resolveName("pose"))
                                     : pnh.resolveName("pose");
-  std::string services = save_map.getService() + ", " + snapshot.getService();
-  if (!settings.octomap.empty()) services += ", " + save_octomap.getService();
   spdlog::info("{}: publishing {}, TF {} -> {}{}", mode->name(), published, publish.map_frame,
-               publish.camera_frame, mode->maps() ? "; services " + services : "");
+               publish.camera_frame, mode->maps() ? "; services " + services.describe() : "");
 
   const int code = pipeline.run(control);
   topics.shutdown();
   publisher.finish();
-  const TopicSource::Counts counts = topics.counts();
-  const RunStats& stats = pipeline.stats();
-  spdlog::info(
-      "rgbdmap_node: {} colour images received ({} lost before the node), {} pairs, {} dropped "
-      "by the node ({} in its buffer, {} in the queue), {} frames mapped, {} maps published",
-      counts.color_received, counts.color_lost, counts.paired,
-      counts.buffer_dropped + stats.frames_dropped.load(), counts.buffer_dropped,
-      stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
-  if (!settings.stats.empty()) {
-    std::ofstream out(settings.stats);
-    out << withNodeCounts(
-        stats.toJson(), counts, publisher.mapsPublished(),
-        publisher.session() ? publisher.session()->totals() : SessionStream::Totals{});
-    if (!out) spdlog::error("{}: cannot write statistics", settings.stats);
-  }
-  service_spinner.stop();
+  reportAtEnd(topics.counts(), pipeline.stats(), publisher, settings.stats);
+  services.stop();
   image_spinner.stop();
   return code;
 }

@@ -94,6 +94,148 @@ struct Element {
   }
 };
 
+// A PLY file being read: its bytes, where reading is, and errors naming the file.
+struct PlyReader {
+  std::string path;
+  std::string data;
+  std::size_t at = 0;
+
+  InputError fail(const std::string& what) const { return InputError(path + ": " + what); }
+  InputError truncated(const Element& e, std::size_t i) const {
+    return fail("truncated: the file ends in " + e.name + " " + std::to_string(i) + " of " +
+                std::to_string(e.count));
+  }
+  std::size_t left() const { return data.size() - at; }
+
+  // One line of the header ("element", "property", ...) added to `elements`; false at end_header.
+  bool headerLine(const std::string& line, std::size_t line_number, bool& binary,
+                  std::vector<Element>& elements) const;
+  // The header: text lines up to "end_header".
+  std::vector<Element> header();
+  void vertices(const Element& e, TriangleMesh& mesh);
+  // Faces (or another element with lists), record by record.
+  void lists(const Element& e, TriangleMesh& mesh);
+};
+
+bool PlyReader::headerLine(const std::string& line, std::size_t line_number, bool& binary,
+                           std::vector<Element>& elements) const {
+  std::istringstream words(line);
+  std::string keyword;
+  words >> keyword;
+  if (line_number == 1) {
+    if (keyword != "ply") throw fail("not a PLY file (it does not start with \"ply\")");
+    return true;
+  }
+  const std::string where = "header line " + std::to_string(line_number) + ": ";
+  if (keyword == "end_header") return false;
+  if (keyword == "comment" || keyword == "obj_info" || keyword.empty()) return true;
+  if (keyword == "format") {
+    std::string format;
+    words >> format;
+    if (format != "binary_little_endian")
+      throw fail(where + "format " + format +
+                 " is not supported (binary_little_endian is: save as binary PLY)");
+    binary = true;
+  } else if (keyword == "element") {
+    Element e;
+    long long count = -1;
+    words >> e.name >> count;
+    if (!words || count < 0) throw fail(where + "bad element line \"" + line + "\"");
+    e.count = static_cast<std::size_t>(count);
+    elements.push_back(e);
+  } else if (keyword == "property") {
+    if (elements.empty()) throw fail(where + "a property before any element");
+    Element& e = elements.back();
+    Property p;
+    words >> p.type;
+    if (p.type == "list") {
+      words >> p.count_type >> p.type;
+      if (typeSize(p.count_type) == 0 || p.count_type == "float" || p.count_type == "double")
+        throw fail(where + "bad list count type \"" + p.count_type + "\"");
+      e.fixed = false;
+    }
+    words >> p.name;
+    if (!words || typeSize(p.type) == 0) throw fail(where + "bad property \"" + line + "\"");
+    p.offset = e.bytes;
+    e.bytes += typeSize(p.type);
+    e.properties.push_back(p);
+  } else {
+    throw fail(where + "unknown keyword \"" + keyword + "\"");
+  }
+  return true;
+}
+
+std::vector<Element> PlyReader::header() {
+  std::vector<Element> elements;
+  bool binary = false;
+  for (std::size_t line_number = 1;; ++line_number) {
+    const std::size_t end = data.find('\n', at);
+    if (end == std::string::npos) throw fail("no end_header: not a complete PLY header");
+    std::string line = data.substr(at, end - at);
+    at = end + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (!headerLine(line, line_number, binary, elements)) break;
+  }
+  if (!binary) throw fail("no format line in the header");
+  return elements;
+}
+
+void PlyReader::vertices(const Element& e, TriangleMesh& mesh) {
+  if (!e.fixed) throw fail("a list property in element vertex is not supported");
+  const Property *x = e.find("x"), *y = e.find("y"), *z = e.find("z");
+  if (!x || !y || !z) throw fail("element vertex has no x, y and z");
+  const Property *r = e.find("red"), *g = e.find("green"), *b = e.find("blue");
+  // Checked before allocating: a corrupt count must not ask for terabytes.
+  if (e.bytes == 0 || left() / e.bytes < e.count)
+    throw truncated(e, left() / std::max<std::size_t>(e.bytes, 1));
+  mesh.vertices.resize(e.count);
+  mesh.colours.assign(e.count, {200, 200, 200});
+  for (std::size_t i = 0; i < e.count; ++i, at += e.bytes) {
+    const char* record = data.data() + at;
+    mesh.vertices[i] = Eigen::Vector3f(static_cast<float>(readScalar(record + x->offset, x->type)),
+                                       static_cast<float>(readScalar(record + y->offset, y->type)),
+                                       static_cast<float>(readScalar(record + z->offset, z->type)));
+    if (r && g && b)
+      mesh.colours[i] = {static_cast<std::uint8_t>(readScalar(record + r->offset, r->type)),
+                         static_cast<std::uint8_t>(readScalar(record + g->offset, g->type)),
+                         static_cast<std::uint8_t>(readScalar(record + b->offset, b->type))};
+  }
+}
+
+void PlyReader::lists(const Element& e, TriangleMesh& mesh) {
+  const bool faces = e.name == "face";
+  for (std::size_t i = 0; i < e.count; ++i) {
+    std::vector<std::uint32_t> polygon;
+    for (const Property& p : e.properties) {
+      const bool indices = faces && (p.name == "vertex_indices" || p.name == "vertex_index");
+      std::size_t values = 1;
+      if (!p.count_type.empty()) {
+        if (left() < typeSize(p.count_type)) throw truncated(e, i);
+        const double n = readScalar(data.data() + at, p.count_type);
+        at += typeSize(p.count_type);
+        if (n < 0) throw fail(e.name + " " + std::to_string(i) + ": a negative list length");
+        values = static_cast<std::size_t>(n);
+      }
+      if (left() / typeSize(p.type) < values) throw truncated(e, i);
+      for (std::size_t k = 0; k < values; ++k, at += typeSize(p.type)) {
+        if (!indices) continue;
+        const double index = readScalar(data.data() + at, p.type);
+        if (index < 0 || index >= static_cast<double>(mesh.vertices.size()))
+          throw fail("face " + std::to_string(i) + ": vertex index " +
+                     std::to_string(static_cast<long long>(index)) + " is out of range (" +
+                     std::to_string(mesh.vertices.size()) + " vertices)");
+        polygon.push_back(static_cast<std::uint32_t>(index));
+      }
+    }
+    if (!faces) continue;
+    if (polygon.size() < 3)
+      throw fail("face " + std::to_string(i) + " has " + std::to_string(polygon.size()) +
+                 " vertices");
+    for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
+      mesh.triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
+  }
+}
+
 }  // namespace
 
 bool writePlyAtomically(const TriangleMesh& mesh, const std::string& path, std::string& error) {
@@ -102,137 +244,24 @@ bool writePlyAtomically(const TriangleMesh& mesh, const std::string& path, std::
 }
 
 TriangleMesh readPly(const std::string& path) {
-  auto fail = [&](const std::string& what) { return InputError(path + ": " + what); };
+  PlyReader ply{path, "", 0};
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw fail("cannot open the file");
-  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-
-  // Header: text lines up to "end_header".
-  std::vector<Element> elements;
-  std::size_t at = 0, line_number = 0;
-  bool binary = false;
-  for (;;) {
-    const std::size_t end = data.find('\n', at);
-    if (end == std::string::npos) throw fail("no end_header: not a complete PLY header");
-    std::string line = data.substr(at, end - at);
-    at = end + 1;
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    if (line_number == 1) {
-      if (keyword != "ply") throw fail("not a PLY file (it does not start with \"ply\")");
-      continue;
-    }
-    const std::string where = "header line " + std::to_string(line_number) + ": ";
-    if (keyword == "end_header") break;
-    if (keyword == "comment" || keyword == "obj_info" || keyword.empty()) continue;
-    if (keyword == "format") {
-      std::string format;
-      words >> format;
-      if (format != "binary_little_endian")
-        throw fail(where + "format " + format +
-                   " is not supported (binary_little_endian is: save as binary PLY)");
-      binary = true;
-    } else if (keyword == "element") {
-      Element e;
-      long long count = -1;
-      words >> e.name >> count;
-      if (!words || count < 0) throw fail(where + "bad element line \"" + line + "\"");
-      e.count = static_cast<std::size_t>(count);
-      elements.push_back(e);
-    } else if (keyword == "property") {
-      if (elements.empty()) throw fail(where + "a property before any element");
-      Element& e = elements.back();
-      Property p;
-      words >> p.type;
-      if (p.type == "list") {
-        words >> p.count_type >> p.type;
-        if (typeSize(p.count_type) == 0 || p.count_type == "float" || p.count_type == "double")
-          throw fail(where + "bad list count type \"" + p.count_type + "\"");
-        e.fixed = false;
-      }
-      words >> p.name;
-      if (!words || typeSize(p.type) == 0) throw fail(where + "bad property \"" + line + "\"");
-      p.offset = e.bytes;
-      e.bytes += typeSize(p.type);
-      e.properties.push_back(p);
-    } else {
-      throw fail(where + "unknown keyword \"" + keyword + "\"");
-    }
-  }
-  if (!binary) throw fail("no format line in the header");
-
+  if (!in) throw ply.fail("cannot open the file");
+  ply.data.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   TriangleMesh mesh;
-  auto truncated = [&](const Element& e, std::size_t i) {
-    return fail("truncated: the file ends in " + e.name + " " + std::to_string(i) + " of " +
-                std::to_string(e.count));
-  };
-  for (const Element& e : elements) {
+  for (const Element& e : ply.header()) {
     if (e.name == "vertex") {
-      if (!e.fixed) throw fail("a list property in element vertex is not supported");
-      const Property *x = e.find("x"), *y = e.find("y"), *z = e.find("z");
-      if (!x || !y || !z) throw fail("element vertex has no x, y and z");
-      const Property *r = e.find("red"), *g = e.find("green"), *b = e.find("blue");
-      // Checked before allocating: a corrupt count must not ask for terabytes.
-      if (e.bytes == 0 || (data.size() - at) / e.bytes < e.count)
-        throw truncated(e, (data.size() - at) / std::max<std::size_t>(e.bytes, 1));
-      mesh.vertices.resize(e.count);
-      mesh.colours.assign(e.count, {200, 200, 200});
-      for (std::size_t i = 0; i < e.count; ++i, at += e.bytes) {
-        const char* record = data.data() + at;
-        mesh.vertices[i] =
-            Eigen::Vector3f(static_cast<float>(readScalar(record + x->offset, x->type)),
-                            static_cast<float>(readScalar(record + y->offset, y->type)),
-                            static_cast<float>(readScalar(record + z->offset, z->type)));
-        if (r && g && b)
-          mesh.colours[i] = {static_cast<std::uint8_t>(readScalar(record + r->offset, r->type)),
-                             static_cast<std::uint8_t>(readScalar(record + g->offset, g->type)),
-                             static_cast<std::uint8_t>(readScalar(record + b->offset, b->type))};
-      }
+      ply.vertices(e, mesh);
     } else if (e.fixed) {  // an element we do not use: skipped whole
-      if (e.bytes != 0 && (data.size() - at) / e.bytes < e.count) throw truncated(e, 0);
-      at += e.bytes * e.count;
-    } else {  // faces (or another element with lists): read record by record
-      const bool faces = e.name == "face";
-      for (std::size_t i = 0; i < e.count; ++i) {
-        std::vector<std::uint32_t> polygon;
-        for (const Property& p : e.properties) {
-          const bool indices = faces && (p.name == "vertex_indices" || p.name == "vertex_index");
-          std::size_t values = 1;
-          std::string type = p.type;
-          if (!p.count_type.empty()) {
-            if (data.size() - at < typeSize(p.count_type)) throw truncated(e, i);
-            const double n = readScalar(data.data() + at, p.count_type);
-            at += typeSize(p.count_type);
-            if (n < 0) throw fail(e.name + " " + std::to_string(i) + ": a negative list length");
-            values = static_cast<std::size_t>(n);
-          }
-          if ((data.size() - at) / typeSize(type) < values) throw truncated(e, i);
-          for (std::size_t k = 0; k < values; ++k, at += typeSize(type)) {
-            if (!indices) continue;
-            const double index = readScalar(data.data() + at, type);
-            if (index < 0 || index >= static_cast<double>(mesh.vertices.size()))
-              throw fail("face " + std::to_string(i) + ": vertex index " +
-                         std::to_string(static_cast<long long>(index)) + " is out of range (" +
-                         std::to_string(mesh.vertices.size()) + " vertices)");
-            polygon.push_back(static_cast<std::uint32_t>(index));
-          }
-        }
-        if (!faces) continue;
-        if (polygon.size() < 3)
-          throw fail("face " + std::to_string(i) + " has " + std::to_string(polygon.size()) +
-                     " vertices");
-        for (std::size_t k = 1; k + 1 < polygon.size(); ++k)
-          mesh.triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
-      }
+      if (e.bytes != 0 && ply.left() / e.bytes < e.count) throw ply.truncated(e, 0);
+      ply.at += e.bytes * e.count;
+    } else {
+      ply.lists(e, mesh);
     }
   }
-  if (at != data.size())
-    throw fail(std::to_string(data.size() - at) +
-               " bytes after the last element: not the size "
-               "the header gives");
+  if (ply.at != ply.data.size())
+    throw ply.fail(std::to_string(ply.left()) +
+                   " bytes after the last element: not the size the header gives");
   return mesh;
 }
 
