@@ -34,7 +34,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 
 namespace {

@@ -20,8 +20,8 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "rgbdmap/tracking/rgbd_odometry.hpp"
 

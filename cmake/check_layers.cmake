@@ -1,9 +1,12 @@
 # Fails when a file includes a header of a subsystem its own subsystem may not depend on, so that
 # dependencies keep pointing one way:
-#   tools, runtime/main -> viewer -> runtime (the core never includes the viewer)
-#   tools, runtime/main -> runtime -> mapping -> tracking -> capture -> base
-#                          runtime -> slam -> tracking (loop closure; mapping never sees it)
-#                          runtime -> drivers -> capture;   eval -> sim -> base;   eval -> capture
+#   tools, main -> viewer -> runtime (the core never includes the viewer)
+#   tools, main -> runtime -> sessions -> map_files -> mapping -> tracking -> capture -> base
+#                  runtime -> sessions -> config -> mapping, slam (every key of a run)
+#                  runtime -> drivers -> capture;   slam -> tracking (loop closure; mapping never
+#                  sees it);   eval -> sim -> base;   eval -> capture
+#   (the run: threads, mode, signals; sessions: what a run leaves to go on from, merging them, a
+#   fleet; map_files: map and trajectory file formats; config: the layers' option structs joined)
 #   launcher (the `rgbdmap` command: libc only, includes no rgbdmap header)
 #   ros (ros/: the ROS adapter) -> runtime and below; nothing includes ros, and no file outside
 #   ros/ includes a ROS header (the core builds without ROS)
@@ -14,6 +17,7 @@
 # files in it include them (and ros/tests the shared test support of tests/), so that no layer
 # reaches into tests/, bench/ or fuzz/ or into another folder's private headers.
 # Run as a build step: cmake -DSOURCE_DIR=<root> -P check_layers.cmake
+# (tests/layering_check.cmake runs it on small trees with includes against the layering.)
 cmake_policy(SET CMP0057 NEW)
 set(allowed_base base)
 set(allowed_capture base capture)
@@ -23,20 +27,24 @@ set(allowed_slam base capture tracking slam)
 set(allowed_sim base sim)
 set(allowed_eval base capture sim eval)
 set(allowed_drivers base capture drivers)
-set(allowed_runtime base capture tracking mapping slam drivers runtime)
-set(allowed_viewer base capture tracking mapping slam runtime viewer)
-set(allowed_tools base capture tracking mapping slam drivers runtime sim eval viewer tools)
+set(allowed_config base capture tracking mapping slam config)
+set(allowed_map_files base capture tracking mapping map_files)
+set(allowed_sessions base capture tracking mapping slam config map_files sessions)
+set(core base capture tracking mapping slam drivers config map_files sessions runtime)
+set(allowed_runtime ${core})
+set(allowed_viewer base capture tracking mapping slam config map_files sessions runtime viewer)
+set(allowed_tools ${core} sim eval viewer tools)
 set(allowed_launcher "")
-set(allowed_ros base capture tracking mapping slam drivers runtime ros)
+set(allowed_ros ${core} ros)
 set(allowed_main ${allowed_tools})
 set(allowed_plugins base)
-set(allowed_tests base capture tracking mapping slam drivers runtime sim eval viewer tools)
+set(allowed_tests ${core} sim eval viewer tools)
 set(allowed_bench ${allowed_tests})
-set(allowed_fuzz base capture tracking mapping slam drivers runtime sim eval)
+set(allowed_fuzz ${core} sim eval)
 
 set(violations "")
-set(layers base capture tracking mapping slam sim eval drivers runtime viewer tools launcher ros
-  main plugins tests bench fuzz)
+set(layers base capture tracking mapping slam sim eval drivers config map_files sessions runtime
+  viewer tools launcher ros main plugins tests bench fuzz)
 foreach(layer ${layers})
   file(GLOB_RECURSE files
     ${SOURCE_DIR}/src/${layer}/*.c

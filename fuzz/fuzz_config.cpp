@@ -2,7 +2,7 @@
 // Any bytes give a configuration or an InputError naming the key or file, never a crash.
 #include "fuzz_input.hpp"
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace rgbdmap;

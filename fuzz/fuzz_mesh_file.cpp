@@ -2,7 +2,7 @@
 // naming the file, never a crash, a read past the data or an allocation the file cannot back.
 #include "fuzz_input.hpp"
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/ply_file.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace rgbdmap;

@@ -8,13 +8,13 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/run_stats.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/pose_source.hpp"
+#include "rgbdmap/runtime/run_mode.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
 #include "rgbdmap/tools/map_renderer.hpp"
@@ -49,6 +49,22 @@ bool stoppedDuringStartUp(const rgbdmap::RunControl& control) {
   return true;
 }
 
+// How the command line names its options in a refusal (chooseRunMode).
+rgbdmap::OptionNames commandLineNames(const CommandLine& o) {
+  rgbdmap::OptionNames names;
+  names.out = "--out";
+  names.localise = "--localise " + o.localise;
+  names.continue_from = "--continue " + o.continue_from;
+  names.mesh = "--mesh";
+  names.grid = "--grid";
+  names.octomap = "--octomap";
+  names.key = [](const std::string& key) { return key; };
+  names.set = [](const std::string& key, const std::string& value) {
+    return "--set " + key + "=" + value;
+  };
+  return names;
+}
+
 int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunSignals& signals) {
   using namespace rgbdmap;
   Config config;
@@ -66,22 +82,6 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (!o.mesh.empty()) checkOutputFolder(o.mesh, "--mesh");
   if (!o.grid.empty()) checkOutputFolder(o.grid, "--grid");
   if (!o.octomap.empty()) checkOutputFolder(o.octomap, "--octomap");
-  // A saved session to start from: localised in (nothing mapped) or continued.
-  std::shared_ptr<const Session> saved;
-  const bool localise = !o.localise.empty();
-  const std::string saved_option =
-      localise ? "--localise " + o.localise : "--continue " + o.continue_from;
-  if (localise) {
-    if (!o.mesh.empty() || !o.grid.empty() || !o.octomap.empty())
-      throw InputError(saved_option +
-                       ": nothing is mapped while localising (no --mesh, --grid or --octomap)");
-    saved = openSessionToStartFrom(o.localise, o.out, "--localise", true);
-  } else if (!o.continue_from.empty()) {
-    if (!o.octomap.empty())
-      throw InputError(saved_option +
-                       ": a session keeps no free space to go on from (no --octomap)");
-    saved = openSessionToStartFrom(o.continue_from, o.out, "--continue", false);
-  }
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
   for (const std::string& s : o.sets) {
@@ -89,25 +89,18 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
     if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
   }
+  // Mapping, or a saved session to start from: localised in (nothing mapped) or continued.
+  const std::shared_ptr<const RunMode> mode = chooseRunMode(
+      {o.out, o.localise, o.continue_from, !o.mesh.empty(), !o.grid.empty(), !o.octomap.empty()},
+      config, commandLineNames(o));
   if (stoppedDuringStartUp(control)) return 0;
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   if (stoppedDuringStartUp(control)) return 0;
-  // Localising and continuing need the camera's own motion (between placements, before one).
-  if (saved && config.pose.source == "auto") config.pose.source = "odometry";
   config.pose.source = resolvePoseSource(
       config.pose.source, source->providesPoses(),
       source->describe() +
           ": has no ground truth poses; use --set pose.source=odometry or pose.source=trajectory");
-
-  if (saved && !tracksKeyframes(config.pose, config.tracking))
-    throw InputError(
-        saved_option + ": needs the camera's odometry (pose.source=" + config.pose.source +
-        ", tracking.method=" + config.tracking.method + "); use --set pose.source=odometry");
-  if (saved && !localise && !config.loop.enabled)
-    throw InputError(saved_option +
-                     ": goes on from the saved map with loop closure (its places "
-                     "and graph); loop.enabled=false turns it off");
-  PipelineOutputs outputs = localise ? localisationOutputs(o.out) : outputsBeside(o.out, o.mesh);
+  PipelineOutputs outputs = mode->outputs(o.out, o.mesh);
   outputs.grid_path = o.grid;
   outputs.octomap_path = o.octomap;
   outputs.status_line = !o.quiet;
@@ -121,8 +114,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   {
     const std::unique_ptr<Viewer> viewer = openRunViewer(o.viewer, control, o.out);
     if (viewer) outputs.publisher = &viewer->mailbox();
-    Pipeline pipeline(config, std::move(source), outputs, saved,
-                      localise ? Pipeline::SessionUse::kLocalise : Pipeline::SessionUse::kContinue);
+    Pipeline pipeline(config, std::move(source), outputs, mode);
     code = pipeline.run(control);
     if (!o.stats_file.empty()) {
       std::ofstream stats(o.stats_file);
@@ -130,7 +122,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
       if (!stats) spdlog::error("{}: cannot write statistics", o.stats_file);
     }
   }
-  if (!o.no_render && !localise) {
+  if (!o.no_render && mode->maps()) {
     std::string error;
     if (renderMapFile(o.out, outputs.trajectory_path, picturePathOf(o.out), {}, error))
       spdlog::info("picture of the map: {}", picturePathOf(o.out));

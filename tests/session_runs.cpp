@@ -12,7 +12,7 @@
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap::test {
@@ -107,11 +107,38 @@ std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms
   return std::nullopt;
 }
 
+MergeRun mergeSessions(const std::vector<std::string>& sessions, const std::string& out) {
+  std::string command = binary() + " merge";
+  for (const std::string& session : sessions) command += " " + session;
+  MergeRun merge;
+  merge.out = out;
+  merge.code = run(command + " --out " + out, &merge.log);
+  for (const std::string& session : sessions)
+    merge.transforms.push_back(mergedTransformOf(stem(out) + "_transforms.txt", session));
+  return merge;
+}
+
+void expectAllButOneJoined(const MergeRun& merge, const std::vector<std::string>& sessions,
+                           std::size_t elsewhere) {
+  ASSERT_EQ(merge.code, 0) << merge.log;
+  EXPECT_NE(
+      merge.log.find(sessions[elsewhere] + ": shares no place with the other sessions: left out"),
+      std::string::npos)
+      << merge.log;
+  EXPECT_NE(merge.log.find("merged " + std::to_string(sessions.size() - 1) + " of " +
+                           std::to_string(sessions.size()) + " sessions"),
+            std::string::npos)
+      << merge.log;
+  for (std::size_t i = 0; i < sessions.size(); ++i)
+    EXPECT_EQ(merge.transforms[i].has_value(), i != elsewhere) << sessions[i] << "\n" << merge.log;
+  std::string output;
+  EXPECT_EQ(run(binary() + " session " + sessionPathOf(merge.out), &output), 0) << output;
+}
+
 std::size_t mergedPoints(const std::string& first, const std::string& second,
                          const std::string& out) {
-  std::string output;
-  EXPECT_EQ(run(binary() + " merge " + first + " " + second + " --out " + out, &output), 0)
-      << output;
+  const MergeRun merge = mergeSessions({first, second}, out);
+  EXPECT_EQ(merge.code, 0) << merge.log;
   return fs::exists(out) ? loadMap(out).size() : 0;
 }
 
@@ -131,6 +158,20 @@ std::vector<std::string> streamOf(const Session& saved, std::uint64_t run) {
   std::vector<std::string> records;
   for (SessionStream::Record& r : stream.take(robot, 0.0)) records.push_back(std::move(r.bytes));
   return records;
+}
+
+std::size_t send(FleetMerger& merger, std::size_t robot, const Session& saved, std::uint64_t run,
+                 const std::string& topic) {
+  std::size_t gaps = 0;
+  for (const std::string& record : streamOf(saved, run))
+    gaps += merger.receive(robot, record, topic) == SessionAssembler::Result::kGap ? 1 : 0;
+  return gaps;
+}
+
+Session streamed(const Session& saved) {
+  SessionAssembler merger;
+  for (const std::string& record : streamOf(saved, 1)) merger.apply(record, "test");
+  return merger.session();
 }
 
 Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& truth) {

@@ -9,7 +9,8 @@
 #include <vector>
 
 #include "rgbdmap/capture/trajectory.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 
 namespace rgbdmap::test {
 
@@ -45,6 +46,21 @@ Trajectory merged(const Trajectory& a, const Trajectory& b);
 std::optional<Eigen::Isometry3d> mergedTransformOf(const std::string& transforms,
                                                    const std::string& session);
 
+// What `rgbdmap merge SESSIONS --out OUT` did: its exit code and output, and each session's
+// transform from OUT_transforms.txt (by session, in the order given; none: left out).
+struct MergeRun {
+  std::string out;
+  int code = 0;
+  std::string log;
+  std::vector<std::optional<Eigen::Isometry3d>> transforms;
+};
+MergeRun mergeSessions(const std::vector<std::string>& sessions, const std::string& out);
+// Checks that `merge` of `sessions` joined every session but `elsewhere` (which shares no place
+// with them): it succeeded, said the one was left out and how many were merged, wrote a
+// transform for each of the others and none for it, and its session (OUT.session) reads back.
+void expectAllButOneJoined(const MergeRun& merge, const std::vector<std::string>& sessions,
+                           std::size_t elsewhere);
+
 // The points of the map `rgbdmap merge first second --out OUT` writes (both runs' kept keyframes
 // fused into one TSDF): what a continued map is compared with.
 std::size_t mergedPoints(const std::string& first, const std::string& second,
@@ -53,6 +69,13 @@ std::size_t mergedPoints(const std::string& first, const std::string& second,
 // The records a robot streams of `saved` (its graph, places and its kept keyframes as map
 // pieces: SessionStream, no budget) as run `run`: what a fleet's merger receives of it.
 std::vector<std::string> streamOf(const Session& saved, std::uint64_t run);
+// Robot `robot` of `merger` sends `saved` as run `run` (streamOf), each record on `topic`.
+// Returns how many records the merger found others missing before (SessionAssembler::kGap).
+std::size_t send(FleetMerger& merger, std::size_t robot, const Session& saved, std::uint64_t run,
+                 const std::string& topic);
+// `saved` as a fleet's merger has it: sent as a robot streams it (graph and places, its kept
+// keyframes as map pieces) and built back from the records (SessionAssembler).
+Session streamed(const Session& saved);
 
 // Where a run's frame lies in its scene: its keyframes (a TUM trajectory file) aligned to the
 // ground truth's.

@@ -12,7 +12,7 @@
 #include <random>
 #include <thread>
 
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/map_files/pcd_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <thread>
 
-#include "rgbdmap/runtime/trajectory_stream.hpp"
+#include "rgbdmap/map_files/trajectory_stream.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

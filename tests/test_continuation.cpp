@@ -10,7 +10,7 @@
 #include <string>
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 

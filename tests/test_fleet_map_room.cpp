@@ -7,7 +7,7 @@
 
 #include <iostream>
 
-#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 
@@ -23,7 +23,7 @@ TEST(FleetMapRoom, AMapOfPiecesIsAsPreciseAsTheRobotsOwn) {
   test::mapTo(scene, dir + "/map.pcd");
   const Session session = readSession(dir + "/map.session");
   FleetMerger merger({"/robot1"}, Config{});
-  for (const std::string& r : test::streamOf(session, 1)) merger.receive(0, r, "/robot1/x");
+  test::send(merger, 0, session, 1, "/robot1/x");
   merger.merge();
   const MapCloud map = merger.map();
   ASSERT_EQ(pcl::io::savePCDFileBinary(dir + "/merged.pcd", map), 0);

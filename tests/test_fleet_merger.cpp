@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
 #include "rgbdmap/slam/motion.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
@@ -33,11 +33,8 @@ TEST(FleetMerger, ARobotOnAMappedRouteIsPlacedWhereItIs) {
   elsewhere.translation() = Eigen::Vector3d(2.0, 0.0, -1.0);
   FleetMerger merger({"/robot1", "/robot2"}, Config{});
   EXPECT_FALSE(merger.merge());  // nothing yet
-  for (const std::string& r : test::streamOf(rpy, 11))
-    EXPECT_NE(merger.receive(0, r, "/robot1/rgbdmap/session/graph"),
-              SessionAssembler::Result::kGap);
-  for (const std::string& r : test::streamOf(movedSession(rpy, elsewhere), 22))
-    merger.receive(1, r, "/robot2/rgbdmap/session/graph");
+  EXPECT_EQ(test::send(merger, 0, rpy, 11, "/robot1/rgbdmap/session/graph"), 0u);
+  test::send(merger, 1, movedSession(rpy, elsewhere), 22, "/robot2/rgbdmap/session/graph");
   ASSERT_TRUE(merger.merge());
   EXPECT_FALSE(merger.merge());  // nothing new since
   const auto robots = merger.robots();
@@ -55,7 +52,7 @@ TEST(FleetMerger, ARobotOnAMappedRouteIsPlacedWhereItIs) {
   // many. (How precise a map of pieces is: the next test, against exact geometry.)
   const MapCloud merged = merger.map();
   FleetMerger one({"/robot1"}, Config{});
-  for (const std::string& r : test::streamOf(rpy, 11)) one.receive(0, r, "/robot1/x");
+  test::send(one, 0, rpy, 11, "/robot1/x");
   one.merge();
   const MapCloud alone = one.map();
   ASSERT_GT(alone.size(), 100000u);
@@ -68,9 +65,8 @@ TEST(FleetMerger, AMergerRestartedFromItsSavedSessionPicksUpAgain) {
   Eigen::Isometry3d elsewhere = Eigen::Isometry3d::Identity();
   elsewhere.translation() = Eigen::Vector3d(1.0, 0.0, 0.5);
   FleetMerger first({"/robot1", "/robot2"}, Config{});
-  for (const std::string& r : test::streamOf(rpy, 11)) first.receive(0, r, "/robot1/x");
-  for (const std::string& r : test::streamOf(movedSession(rpy, elsewhere), 22))
-    first.receive(1, r, "/robot2/x");
+  test::send(first, 0, rpy, 11, "/robot1/x");
+  test::send(first, 1, movedSession(rpy, elsewhere), 22, "/robot2/x");
   first.merge();
   const std::size_t points = first.map().size();
   ASSERT_TRUE(first.robots()[1].placed);
@@ -92,7 +88,7 @@ TEST(FleetMerger, AMergerRestartedFromItsSavedSessionPicksUpAgain) {
   EXPECT_NEAR(static_cast<double>(again.map().size()), static_cast<double>(points),
               0.02 * static_cast<double>(points));
   // Robot 1 did not notice and sends everything again (a merger asked): nothing twice.
-  for (const std::string& r : test::streamOf(rpy, 11)) again.receive(0, r, "/robot1/x");
+  test::send(again, 0, rpy, 11, "/robot1/x");
   again.merge();
   robots = again.robots();
   EXPECT_EQ(robots[0].keyframes, rpy.graph.keyframes.size());
@@ -108,7 +104,7 @@ TEST(FleetMerger, AMergerRestartedFromItsSavedSessionPicksUpAgain) {
 TEST(FleetMerger, ARobotElsewhereStaysUnplacedAndARestartKeepsTheOldRun) {
   const Session& rpy = rpySession();
   FleetMerger merger({"/robot1", "/robot2"}, Config{});
-  for (const std::string& r : test::streamOf(rpy, 1)) merger.receive(0, r, "/robot1/x");
+  test::send(merger, 0, rpy, 1, "/robot1/x");
   // Robot 2 saw something else: the same keyframes with places of no resemblance.
   Session other = rpy;
   for (auto& place : other.graph.places)
@@ -120,13 +116,13 @@ TEST(FleetMerger, ARobotElsewhereStaysUnplacedAndARestartKeepsTheOldRun) {
                                         place->view.descriptors.type(), cv::Scalar::all(0));
       place = blank;
     }
-  for (const std::string& r : test::streamOf(other, 2)) merger.receive(1, r, "/robot2/x");
+  test::send(merger, 1, other, 2, "/robot2/x");
   merger.merge();
   EXPECT_FALSE(merger.robots()[1].placed);
   EXPECT_GT(merger.robots()[1].keyframes, 0u);
 
   // Robot 1 restarts: a new run, the old one kept beside it.
-  for (const std::string& r : test::streamOf(rpy, 3)) merger.receive(0, r, "/robot1/x");
+  test::send(merger, 0, rpy, 3, "/robot1/x");
   merger.merge();
   const auto robots = merger.robots();
   EXPECT_EQ(robots[0].runs, 2u);

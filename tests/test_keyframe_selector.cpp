@@ -5,8 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/mapping/keyframe_selector.hpp"
-#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -7,8 +7,8 @@
 #include <iostream>
 
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/sim/synthetic_sequence.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 #include "test_support.hpp"

@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "rgbdmap/runtime/map_piece.hpp"
+#include "rgbdmap/sessions/map_piece.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -15,8 +15,8 @@
 #include <utility>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 #include "rgbdmap/mapping/mesh_extractor.hpp"
-#include "rgbdmap/runtime/ply_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -6,7 +6,7 @@
 
 #include <filesystem>
 
-#include "rgbdmap/runtime/ply_file.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "rgbdmap/eval/map_evaluation.hpp"
-#include "rgbdmap/runtime/ply_file.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

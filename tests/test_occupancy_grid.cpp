@@ -15,10 +15,10 @@
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/map_files/grid_file.hpp"
 #include "rgbdmap/mapping/floor_finder.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/occupancy_grid.hpp"
-#include "rgbdmap/runtime/grid_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -21,9 +21,9 @@
 #include <thread>
 
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/drivers/openni2_source.hpp"
 #include "rgbdmap/drivers/usb_cameras.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "test_support.hpp"
 

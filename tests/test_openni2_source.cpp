@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/drivers/openni2_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "rgbdmap/capture/tum_sequence.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -11,8 +11,8 @@
 
 #include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "test_support.hpp"
 

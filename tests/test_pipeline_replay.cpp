@@ -8,9 +8,9 @@
 
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/mapping/back_projector.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {

@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/slam/motion.hpp"
 #include "rgbdmap/slam/place_matcher.hpp"
 #include "session_runs.hpp"

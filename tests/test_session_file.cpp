@@ -12,7 +12,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -227,6 +227,34 @@ TEST(SessionFile, ItsKeyframesFusedAgainGiveTheMapTheRunWrote) {
   for (std::size_t i = 0; i < again.size(); i += 7, ++checked)
     if (tree.nearestKSearch(again[i], 1, index, squared) == 1 && squared[0] <= 1e-4f) ++near;
   EXPECT_GE(static_cast<double>(near), 0.95 * checked) << near << " of " << checked;
+}
+
+// A session saved before tracking.undistort and filter.undistort became one key still loads: its
+// configuration is read with one warning line naming the file and the key now.
+TEST(SessionFile, ItsConfigurationWithTheFormerUndistortKeysStillLoads) {
+  const std::string dir = test::freshDir();
+  const std::string copy = copySession(dir, "old.session");
+  const std::string config = copy + "/config.yaml";
+  std::string text = test::readFile(config);
+  const auto drop = text.find("  undistort: ");
+  ASSERT_NE(drop, std::string::npos) << text;
+  text.erase(drop, text.find('\n', drop) + 1 - drop);
+  for (const std::string section : {"tracking:\n", "filter:\n"}) {
+    const auto at = text.find("\n" + section);
+    ASSERT_NE(at, std::string::npos) << text;
+    text.insert(at + 1 + section.size(), "  undistort: true  # former key\n");
+  }
+  std::ofstream(config, std::ios::trunc) << text;
+  std::string output;
+  ASSERT_EQ(
+      test::run(test::binary() + " session " + copy + " --map " + dir + "/again.pcd", &output), 0)
+      << output;
+  EXPECT_EQ(test::countOccurrences(output, "undistort"), 1u) << output;
+  EXPECT_NE(
+      output.find(config + ": tracking.undistort and filter.undistort are now camera.undistort"),
+      std::string::npos)
+      << output;
+  EXPECT_GT(test::loadMap(dir + "/again.pcd").size(), 100000u);
 }
 
 TEST(SessionFile, NotSavedWhenTurnedOffOrWithoutLoopClosure) {

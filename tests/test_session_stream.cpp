@@ -8,9 +8,9 @@
 #include <cstring>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/map_piece.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/map_piece.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 

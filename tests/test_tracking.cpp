@@ -9,8 +9,8 @@
 #include <iostream>
 
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "test_support.hpp"
 

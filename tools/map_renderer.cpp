@@ -8,7 +8,7 @@
 #include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/base/image_file.hpp"
 #include "rgbdmap/eval/map_evaluation.hpp"
-#include "rgbdmap/runtime/ply_file.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -8,11 +8,11 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
+#include "rgbdmap/map_files/pcd_file.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
-#include "rgbdmap/runtime/session_merge.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
+#include "rgbdmap/sessions/session_merge.hpp"
 #include "rgbdmap/slam/motion.hpp"
 #include "rgbdmap/tools/commands.hpp"
 

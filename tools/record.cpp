@@ -13,8 +13,8 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
 #include "rgbdmap/capture/accelerometer_log.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/drivers/kinect_accelerometer.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/runtime/source_factory.hpp"
 #include "rgbdmap/tools/commands.hpp"
@@ -128,6 +128,123 @@ int recordFakenect(const RecordOptions& o, const Config& config, const RunContro
   return 0;
 }
 
+// A TUM folder being recorded from `origin`: its image lists, the accelerometer log (from the
+// first frame that knows its up) and what was saved.
+class TumRecording {
+ public:
+  TumRecording(const fs::path& out, const std::string& origin)
+      : out_(out),
+        origin_(origin),
+        rgb_list_((out / "rgb.txt").string(), "color images", origin),
+        depth_list_((out / "depth.txt").string(), "depth maps", origin) {}
+
+  // Saves `frame`; not when its stamp is not after the last one's (said).
+  void add(const Frame& frame) {
+    // TUM file names are the stamps; a repeated or backwards stamp would clash or mis-sort.
+    char stamp[64];
+    std::snprintf(stamp, sizeof stamp, "%.6f", frame.timestamp);
+    const double rounded_stamp = std::strtod(stamp, nullptr);
+    if (written_ > 0 && rounded_stamp <= last_stamp_) {
+      ++out_of_order_;
+      spdlog::warn("{}: frame at {} s is not after the previous one ({} s); not recorded", origin_,
+                   stamp, last_stamp_);
+      return;
+    }
+    last_stamp_ = rounded_stamp;
+    const std::string rgb_file = std::string("rgb/") + stamp + ".png";
+    const std::string depth_file = std::string("depth/") + stamp + ".png";
+    writePng(frame.color, partialImageIn(out_), out_ / rgb_file);
+    too_far_ += toTumDepth(frame.depth, depth_units_);
+    writePng(depth_units_, partialImageIn(out_), out_ / depth_file);
+    rgb_list_.add(stamp, rgb_file);
+    depth_list_.add(stamp, depth_file);
+    if (frame.has_up) {
+      if (!accelerometer_)
+        accelerometer_.emplace((out_ / "accelerometer.txt").string(), "accelerometer data", origin_,
+                               "timestamp ax ay az");
+      // At rest, as TUM's: the reaction to gravity (1 g) in the Kinect accelerometer's axes.
+      const Eigen::Vector3d a =
+          AccelerometerLog::upInCamera(frame.up.normalized()) * KinectAcceleration::kGravity;
+      char fields[96];
+      std::snprintf(fields, sizeof fields, "%.6f %.6f %.6f", a.x(), a.y(), a.z());
+      accelerometer_->add(stamp, fields);
+    }
+    ++written_;
+  }
+
+  // What was recorded, and how to replay it with the camera's intrinsics (a TUM folder holds
+  // none).
+  void report(const FrameSource& source) const {
+    if (too_far_ > 0)
+      spdlog::warn(
+          "{} depth measurements beyond 13.1 m (the 16-bit TUM range) were saved as missing",
+          too_far_);
+    const CameraIntrinsics camera = source.intrinsics();
+    std::printf("recorded %llu frames to %s (%llu skipped by the source, %llu out of order)\n",
+                static_cast<unsigned long long>(written_), out_.string().c_str(),
+                static_cast<unsigned long long>(source.skipped()),
+                static_cast<unsigned long long>(out_of_order_));
+    std::printf(
+        "replay: rgbdmap --source tum:%s --set camera.fx=%g --set camera.fy=%g "
+        "--set camera.cx=%g --set camera.cy=%g",
+        fs::absolute(out_).string().c_str(), camera.fx, camera.fy, camera.cx, camera.cy);
+    if (camera.hasDistortion())
+      std::printf(
+          " --set camera.k1=%g --set camera.k2=%g --set camera.p1=%g --set camera.p2=%g "
+          "--set camera.k3=%g",
+          camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+    std::printf("\n");
+  }
+
+  std::uint64_t written() const { return written_; }
+
+ private:
+  fs::path out_;
+  std::string origin_;
+  TumList rgb_list_, depth_list_;
+  std::optional<TumList> accelerometer_;
+  cv::Mat depth_units_;
+  std::uint64_t written_ = 0, too_far_ = 0, out_of_order_ = 0;
+  double last_stamp_ = 0;
+};
+
+// A source as a TUM folder: every frame the source gives, until it ends or Ctrl-C; a camera that
+// stops delivering is waited for when it can reconnect.
+int recordTum(const RecordOptions& o, const Config& config, const RunControl& control) {
+  const fs::path out(o.out);
+  std::error_code ec;
+  if (fs::exists(out / "rgb.txt", ec) || fs::exists(out / "depth.txt", ec))
+    throw InputError(o.out +
+                     ": already holds a recording (rgb.txt/depth.txt); choose another --out");
+  fs::create_directories(out / "rgb", ec);
+  if (!ec) fs::create_directories(out / "depth", ec);
+  if (ec) throw InputError(o.out + ": cannot create the folder (" + ec.message() + ")");
+
+  std::unique_ptr<FrameSource> source = openSource(o.source, config);
+  const std::string origin = source->describe();
+  spdlog::info("recording {} into {}", origin, o.out);
+  TumRecording recording(out, origin);
+  Frame frame;
+  while (!control.stop.load() && (o.frames == 0 || recording.written() < o.frames)) {
+    const ReadStatus status = source->read(frame);
+    if (status == ReadStatus::kEnd) break;
+    if (status == ReadStatus::kSkipped) continue;
+    if (status == ReadStatus::kTimeout) {
+      if (!source->canReconnect()) throw InputError(origin + ": camera stopped delivering frames");
+      spdlog::warn(
+          "{}: camera stopped delivering frames; waiting for it (Ctrl-C stops, keeping "
+          "the {} frames saved)",
+          origin, recording.written());
+      while (!control.stop.load() && !source->reconnect()) {
+      }
+      continue;
+    }
+    recording.add(frame);
+  }
+  recording.report(*source);
+  return 0;
+}
+
 int record(const RecordOptions& o) {
   RunControl control;
   RunSignals signals(control);  // before the source starts any thread, so they inherit the mask
@@ -147,93 +264,8 @@ int record(const RecordOptions& o) {
     if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
     config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
   }
-
-  if (o.format == "fakenect") return recordFakenect(o, config, control);
-  const fs::path out(o.out);
-  std::error_code ec;
-  if (fs::exists(out / "rgb.txt", ec) || fs::exists(out / "depth.txt", ec))
-    throw InputError(o.out +
-                     ": already holds a recording (rgb.txt/depth.txt); choose another --out");
-  fs::create_directories(out / "rgb", ec);
-  if (!ec) fs::create_directories(out / "depth", ec);
-  if (ec) throw InputError(o.out + ": cannot create the folder (" + ec.message() + ")");
-
-  std::unique_ptr<FrameSource> source = openSource(o.source, config);
-  const std::string origin = source->describe();
-  spdlog::info("recording {} into {}", origin, o.out);
-  TumList rgb_list((out / "rgb.txt").string(), "color images", origin);
-  TumList depth_list((out / "depth.txt").string(), "depth maps", origin);
-  std::optional<TumList> accelerometer;  // from the first frame that knows its up
-
-  Frame frame;
-  cv::Mat depth_units;
-  std::uint64_t written = 0, too_far = 0, out_of_order = 0;
-  double last_stamp = 0;
-  char stamp[64];
-  while (!control.stop.load() && (o.frames == 0 || written < o.frames)) {
-    const ReadStatus status = source->read(frame);
-    if (status == ReadStatus::kEnd) break;
-    if (status == ReadStatus::kSkipped) continue;
-    if (status == ReadStatus::kTimeout) {
-      if (!source->canReconnect()) throw InputError(origin + ": camera stopped delivering frames");
-      spdlog::warn(
-          "{}: camera stopped delivering frames; waiting for it (Ctrl-C stops, keeping "
-          "the {} frames saved)",
-          origin, written);
-      while (!control.stop.load() && !source->reconnect()) {
-      }
-      continue;
-    }
-    // TUM file names are the stamps; a repeated or backwards stamp would clash or mis-sort.
-    std::snprintf(stamp, sizeof stamp, "%.6f", frame.timestamp);
-    const double rounded_stamp = std::strtod(stamp, nullptr);
-    if (written > 0 && rounded_stamp <= last_stamp) {
-      ++out_of_order;
-      spdlog::warn("{}: frame at {} s is not after the previous one ({} s); not recorded", origin,
-                   stamp, last_stamp);
-      continue;
-    }
-    last_stamp = rounded_stamp;
-    const std::string rgb_file = std::string("rgb/") + stamp + ".png";
-    const std::string depth_file = std::string("depth/") + stamp + ".png";
-    writePng(frame.color, partialImageIn(out), out / rgb_file);
-    too_far += toTumDepth(frame.depth, depth_units);
-    writePng(depth_units, partialImageIn(out), out / depth_file);
-    rgb_list.add(stamp, rgb_file);
-    depth_list.add(stamp, depth_file);
-    if (frame.has_up) {
-      if (!accelerometer)
-        accelerometer.emplace((out / "accelerometer.txt").string(), "accelerometer data", origin,
-                              "timestamp ax ay az");
-      // At rest, as TUM's: the reaction to gravity (1 g) in the Kinect accelerometer's axes.
-      const Eigen::Vector3d a =
-          AccelerometerLog::upInCamera(frame.up.normalized()) * KinectAcceleration::kGravity;
-      char fields[96];
-      std::snprintf(fields, sizeof fields, "%.6f %.6f %.6f", a.x(), a.y(), a.z());
-      accelerometer->add(stamp, fields);
-    }
-    ++written;
-  }
-  if (too_far > 0)
-    spdlog::warn("{} depth measurements beyond 13.1 m (the 16-bit TUM range) were saved as missing",
-                 too_far);
-  const CameraIntrinsics camera = source->intrinsics();
-  std::printf("recorded %llu frames to %s (%llu skipped by the source, %llu out of order)\n",
-              static_cast<unsigned long long>(written), o.out.c_str(),
-              static_cast<unsigned long long>(source->skipped()),
-              static_cast<unsigned long long>(out_of_order));
-  // A TUM folder holds no intrinsics: say which ones the frames were taken with.
-  std::printf(
-      "replay: rgbdmap --source tum:%s --set camera.fx=%g --set camera.fy=%g "
-      "--set camera.cx=%g --set camera.cy=%g",
-      fs::absolute(out).string().c_str(), camera.fx, camera.fy, camera.cx, camera.cy);
-  if (camera.hasDistortion())
-    std::printf(
-        " --set camera.k1=%g --set camera.k2=%g --set camera.p1=%g --set camera.p2=%g "
-        "--set camera.k3=%g",
-        camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
-  std::printf("\n");
-  return 0;
+  return o.format == "fakenect" ? recordFakenect(o, config, control)
+                                : recordTum(o, config, control);
 }
 
 }  // namespace

@@ -6,9 +6,9 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
-#include "rgbdmap/runtime/config.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/config/config.hpp"
+#include "rgbdmap/map_files/pcd_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/tools/commands.hpp"
 
 namespace rgbdmap {

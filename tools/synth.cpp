@@ -34,30 +34,87 @@ bool parseFloorSize(const std::string& text, double& length, double& width) {
   return static_cast<bool>(in >> length >> sep >> width) && sep == 'x' && in.eof();
 }
 
-}  // namespace
+// What `synth` was asked.
+struct SynthOptions {
+  std::string out, scene, room, building, write_scene;
+  double height = 2.8;
+  bool no_noise = false;
+  SyntheticSequenceOptions sequence;
+};
 
-void addSynthCommand(CLI::App& app, Command& selected) {
-  auto* cmd = app.add_subcommand(
-      "synth",
-      "write a synthetic RGB-D sequence (TUM layout) of a room with exact geometry: Kinect-like "
-      "depth noise, ground truth, scene.yaml and visible_surface.pcd for `rgbdmap evaluate`");
-  struct Options {
-    std::string out, scene, room, building, write_scene;
-    double height = 2.8;
-    bool no_noise = false;
-    SyntheticSequenceOptions sequence;
-  };
-  auto o = std::make_shared<Options>();
-  cmd->add_option("-o,--out", o->out,
-                  "folder to write (created if missing); required unless --write-scene alone");
-  auto* frames = cmd->add_option("-n,--frames", o->sequence.frames,
-                                 "number of frames (a tour: default one whole tour)")
-                     ->capture_default_str()
-                     ->check(CLI::Range(1, 1000000));
-  cmd->add_option("--building", o->building,
-                  "an office floor of LENGTHxWIDTH metres instead of a room (e.g. 30x20): rooms "
-                  "off a corridor, doors, furniture; --seed changes the plan (see "
-                  "docs/synthetic.md)")
+// The scene `o` asks for: a generated floor, a YAML scene or the built-in room (a floor's
+// reference surface is sampled coarser unless --surface-voxel was given).
+SyntheticScene sceneFor(const SynthOptions& o, bool surface_voxel_given,
+                        SyntheticSequenceOptions& options) {
+  if (!o.building.empty()) {
+    BuildingOptions building;
+    parseFloorSize(o.building, building.length, building.width);
+    building.height = o.height;
+    building.seed = options.seed;
+    if (!surface_voxel_given) options.surface_voxel = 0.02;
+    return generateBuilding(building);
+  }
+  Eigen::Vector3d size(5.0, 4.0, 2.8);
+  if (!o.room.empty()) parseRoomSize(o.room, size);
+  return o.scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o.scene);
+}
+
+// Writes what `o` asks for and says where (the *_given flags: whether the option was on the
+// command line).
+int synth(const SynthOptions& o, bool noise_seed_given, bool frames_given,
+          bool surface_voxel_given) {
+#if defined(__SANITIZE_THREAD__)
+  // OpenCV's parallel loops run on TBB's workers, which are not instrumented: the sanitizer
+  // cannot see them finish and would report every image they wrote. Serial in that build.
+  cv::setNumThreads(1);
+#endif
+  SyntheticSequenceOptions options = o.sequence;
+  options.noise = !o.no_noise;
+  if (!noise_seed_given) options.noise_seed = options.seed;
+  if (o.out.empty() && o.write_scene.empty())
+    throw InputError("synth: --out FOLDER is required (or --write-scene FILE alone)");
+  if (!o.building.empty() && (!o.scene.empty() || !o.room.empty()))
+    throw InputError("synth: --building makes its own scene; leave out --scene and --room");
+  if (options.path == "tour" && !frames_given) options.frames = 0;  // one whole tour
+  const SyntheticScene scene = sceneFor(o, surface_voxel_given, options);
+  if (!o.write_scene.empty()) {
+    try {
+      scene.save(o.write_scene);
+    } catch (const std::runtime_error& e) {
+      throw InputError(e.what());
+    }
+    std::printf("wrote the scene to %s (%zu primitives, %zu walls%s)\n", o.write_scene.c_str(),
+                scene.primitives().size(), scene.walls().size(),
+                scene.floorPlan() ? ", a floor plan" : "");
+    if (o.out.empty()) return 0;
+  }
+  if (o.out.find("freiburg") != std::string::npos)
+    std::fprintf(stderr,
+                 "rgbdmap synth: warning: '%s' contains 'freiburg', so rgbdmap would pick a "
+                 "TUM freiburg camera preset for it; this sequence uses the default "
+                 "intrinsics (pass --config default when mapping it)\n",
+                 o.out.c_str());
+  const SyntheticSequenceSummary summary = writeSyntheticSequence(o.out, scene, options);
+  if (summary.path_seconds > 0.0)
+    std::printf("tour: %.0f m in %.1f s (%d frames at %.0f fps, one tour: %.0f frames)\n",
+                summary.path_length, summary.path_seconds, summary.frames, options.fps,
+                std::floor(summary.path_seconds * options.fps) + 1);
+  std::printf(
+      "wrote %d frames to %s in %.1f s (%.1f%% of pixels with depth, %zu visible surface "
+      "samples)\nmap it:   rgbdmap --source tum:%s --out map.pcd --rate max\nscore it: "
+      "rgbdmap evaluate map map.pcd --scene %s\n",
+      summary.frames, o.out.c_str(), summary.seconds, 100.0 * summary.valid_depth_share,
+      summary.surface_points, o.out.c_str(), o.out.c_str());
+  return 0;
+}
+
+// The options of a generated floor and its tour; returns --surface-voxel's (a floor samples its
+// reference coarser unless it is given).
+CLI::Option* addBuildingOptions(CLI::App& cmd, SynthOptions& o) {
+  cmd.add_option("--building", o.building,
+                 "an office floor of LENGTHxWIDTH metres instead of a room (e.g. 30x20): rooms "
+                 "off a corridor, doors, furniture; --seed changes the plan (see "
+                 "docs/synthetic.md)")
       ->check([](const std::string& text) -> std::string {
         double length = 0, width = 0;
         if (!parseFloorSize(text, length, width)) return "expected e.g. 30x20";
@@ -66,24 +123,41 @@ void addSynthCommand(CLI::App& app, Command& selected) {
         b.width = width;
         return buildingProblem(b);
       });
-  cmd->add_option("--height", o->height, "the building's floor-to-ceiling height (m)")
+  cmd.add_option("--height", o.height, "the building's floor-to-ceiling height (m)")
       ->capture_default_str()
       ->check(CLI::Range(2.4, 5.0));
-  cmd->add_option("--write-scene", o->write_scene,
-                  "also write the scene description (YAML) to this file, to edit and pass back "
-                  "with --scene; without --out nothing else is written");
+  cmd.add_option("--write-scene", o.write_scene,
+                 "also write the scene description (YAML) to this file, to edit and pass back "
+                 "with --scene; without --out nothing else is written");
   auto* surface_voxel =
-      cmd->add_option("--surface-voxel", o->sequence.surface_voxel,
-                      "m between samples of visible_surface.pcd, the reference for recall "
-                      "(default 0.005; 0.02 for a building, to keep a floor's samples in memory)")
+      cmd.add_option("--surface-voxel", o.sequence.surface_voxel,
+                     "m between samples of visible_surface.pcd, the reference for recall "
+                     "(default 0.005; 0.02 for a building, to keep a floor's samples in memory)")
           ->check(CLI::Range(0.001, 0.5));
-  cmd->add_option("--tour-speed", o->sequence.tour_speed, "the tour's top walking speed (m/s)")
+  cmd.add_option("--tour-speed", o.sequence.tour_speed, "the tour's top walking speed (m/s)")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 3.0));
-  cmd->add_option("--tour-turn-rate", o->sequence.tour_turn_rate,
-                  "the tour's top turn rate (rad/s)")
+  cmd.add_option("--tour-turn-rate", o.sequence.tour_turn_rate, "the tour's top turn rate (rad/s)")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 3.0));
+  return surface_voxel;
+}
+
+}  // namespace
+
+void addSynthCommand(CLI::App& app, Command& selected) {
+  auto* cmd = app.add_subcommand(
+      "synth",
+      "write a synthetic RGB-D sequence (TUM layout) of a room with exact geometry: Kinect-like "
+      "depth noise, ground truth, scene.yaml and visible_surface.pcd for `rgbdmap evaluate`");
+  auto o = std::make_shared<SynthOptions>();
+  cmd->add_option("-o,--out", o->out,
+                  "folder to write (created if missing); required unless --write-scene alone");
+  auto* frames = cmd->add_option("-n,--frames", o->sequence.frames,
+                                 "number of frames (a tour: default one whole tour)")
+                     ->capture_default_str()
+                     ->check(CLI::Range(1, 1000000));
+  auto* surface_voxel = addBuildingOptions(*cmd, *o);
   cmd->add_option("--seed", o->sequence.seed, "random seed of the path's sway (and of the noise)")
       ->capture_default_str();
   auto* noise_seed = cmd->add_option(
@@ -150,62 +224,7 @@ void addSynthCommand(CLI::App& app, Command& selected) {
       ->check(CLI::Range(0, 9));
   cmd->callback([o, noise_seed, frames, surface_voxel, &selected] {
     selected = [o, noise_seed, frames, surface_voxel] {
-#if defined(__SANITIZE_THREAD__)
-      // OpenCV's parallel loops run on TBB's workers, which are not instrumented: the sanitizer
-      // cannot see them finish and would report every image they wrote. Serial in that build.
-      cv::setNumThreads(1);
-#endif
-      SyntheticSequenceOptions options = o->sequence;
-      options.noise = !o->no_noise;
-      if (noise_seed->count() == 0) options.noise_seed = options.seed;
-      if (o->out.empty() && o->write_scene.empty())
-        throw InputError("synth: --out FOLDER is required (or --write-scene FILE alone)");
-      if (!o->building.empty() && (!o->scene.empty() || !o->room.empty()))
-        throw InputError("synth: --building makes its own scene; leave out --scene and --room");
-      if (options.path == "tour" && frames->count() == 0) options.frames = 0;  // one whole tour
-      Eigen::Vector3d size(5.0, 4.0, 2.8);
-      if (!o->room.empty()) parseRoomSize(o->room, size);
-      SyntheticScene scene;
-      if (!o->building.empty()) {
-        BuildingOptions building;
-        parseFloorSize(o->building, building.length, building.width);
-        building.height = o->height;
-        building.seed = options.seed;
-        scene = generateBuilding(building);
-        if (surface_voxel->count() == 0) options.surface_voxel = 0.02;
-      } else {
-        scene =
-            o->scene.empty() ? SyntheticScene::defaultRoom(size) : SyntheticScene::load(o->scene);
-      }
-      if (!o->write_scene.empty()) {
-        try {
-          scene.save(o->write_scene);
-        } catch (const std::runtime_error& e) {
-          throw InputError(e.what());
-        }
-        std::printf("wrote the scene to %s (%zu primitives, %zu walls%s)\n", o->write_scene.c_str(),
-                    scene.primitives().size(), scene.walls().size(),
-                    scene.floorPlan() ? ", a floor plan" : "");
-        if (o->out.empty()) return 0;
-      }
-      if (o->out.find("freiburg") != std::string::npos)
-        std::fprintf(stderr,
-                     "rgbdmap synth: warning: '%s' contains 'freiburg', so rgbdmap would pick a "
-                     "TUM freiburg camera preset for it; this sequence uses the default "
-                     "intrinsics (pass --config default when mapping it)\n",
-                     o->out.c_str());
-      const SyntheticSequenceSummary summary = writeSyntheticSequence(o->out, scene, options);
-      if (summary.path_seconds > 0.0)
-        std::printf("tour: %.0f m in %.1f s (%d frames at %.0f fps, one tour: %.0f frames)\n",
-                    summary.path_length, summary.path_seconds, summary.frames, options.fps,
-                    std::floor(summary.path_seconds * options.fps) + 1);
-      std::printf(
-          "wrote %d frames to %s in %.1f s (%.1f%% of pixels with depth, %zu visible surface "
-          "samples)\nmap it:   rgbdmap --source tum:%s --out map.pcd --rate max\nscore it: "
-          "rgbdmap evaluate map map.pcd --scene %s\n",
-          summary.frames, o->out.c_str(), summary.seconds, 100.0 * summary.valid_depth_share,
-          summary.surface_points, o->out.c_str(), o->out.c_str());
-      return 0;
+      return synth(*o, noise_seed->count() > 0, frames->count() > 0, surface_voxel->count() > 0);
     };
   });
 }

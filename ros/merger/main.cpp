@@ -21,12 +21,12 @@
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/map_files/pcd_file.hpp"
 #include "rgbdmap/ros/cloud_message.hpp"
 #include "rgbdmap/ros/robot_namespaces.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
-#include "rgbdmap/runtime/fleet_merger.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 
 namespace {
 

@@ -8,22 +8,22 @@
 #include <spdlog/spdlog.h>
 #include <std_srvs/Trigger.h>
 
+#include <algorithm>
 #include <fstream>
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/ros/node_params.hpp"
 #include "rgbdmap/ros/ros_publisher.hpp"
 #include "rgbdmap/ros/topic_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/runtime/output_files.hpp"
 #include "rgbdmap/runtime/pipeline.hpp"
 #include "rgbdmap/runtime/pose_source.hpp"
+#include "rgbdmap/runtime/run_mode.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
-#include "rgbdmap/tracking/pose_provider.hpp"
 
 namespace {
 
@@ -77,6 +77,113 @@ std::string withNodeCounts(const std::string& json, const TopicSource::Counts& c
   return out;
 }
 
+// How the node names its parameters in a refusal (chooseRunMode): "parameter /rgbdmap/localise",
+// and config keys as private parameters ("pose/source", set as _pose/source:=odometry).
+OptionNames nodeNames(const ros::NodeHandle& pnh) {
+  OptionNames names;
+  names.out = "~out";
+  names.localise = "parameter " + pnh.resolveName("localise");
+  names.continue_from = "parameter " + pnh.resolveName("continue");
+  names.grid = "~grid";
+  names.octomap = "~octomap";
+  names.key = [](std::string key) {
+    std::replace(key.begin(), key.end(), '.', '/');
+    return key;
+  };
+  names.set = [key = names.key](const std::string& k, const std::string& value) {
+    return "_" + key(k) + ":=" + value;
+  };
+  return names;
+}
+
+// What the node publishes, and where: its frames (the camera's from its images unless given),
+// how often, and the session stream (only a mapping run has one: localising adds nothing).
+RosPublisher::Options publisherOptions(const NodeSettings& settings, const TopicSource& topics,
+                                       const Config& config, const RunMode& mode) {
+  RosPublisher::Options publish;
+  publish.map_frame = settings.map_frame;
+  publish.camera_frame = !settings.camera_frame.empty()  ? settings.camera_frame
+                         : !topics.cameraFrame().empty() ? topics.cameraFrame()
+                                                         : "camera_rgb_optical_frame";
+  if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
+    publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
+  publish.map_interval = settings.map_interval;
+  publish.grid_interval = settings.grid_interval;
+  publish.up = config.up;
+  publish.grid = config.grid;
+  publish.session.interval = mode.maps() ? settings.session_interval : 0.0;
+  publish.session.stream.bytes_per_second = settings.session_rate;
+  publish.session.lossless = settings.lossless;
+  return publish;
+}
+
+// The node's services, on a queue and thread of their own: a call waits for its checkpoint
+// without holding up the image callbacks. ~save_map and ~snapshot write `saved` (the map;
+// localising, the trajectory alone), ~save_octomap the OctoMap, ~session/resend asks the session
+// stream to send everything again.
+class NodeServices {
+ public:
+  NodeServices(RunControl& control, const Pipeline& pipeline, RosPublisher& publisher,
+               const std::string& saved, const std::string& octomap)
+      : octomap_(octomap) {
+    nh_.setCallbackQueue(&queue_);
+    using Request = std_srvs::Trigger::Request;
+    using Response = std_srvs::Trigger::Response;
+    const auto save = [&control, &pipeline, saved](Request&, Response& response) {
+      return writeMapNow(control, pipeline.stats(), saved, response);
+    };
+    save_map_ = nh_.advertiseService<Request, Response>("save_map", save);
+    snapshot_ = nh_.advertiseService<Request, Response>("snapshot", save);
+    save_octomap_ = nh_.advertiseService<Request, Response>(
+        "save_octomap", [&control, &pipeline, octomap](Request&, Response& response) {
+          writeMapNow(control, pipeline.stats(), octomap, response);
+          if (response.success) response.message = octomap;
+          return true;
+        });
+    if (SessionPublisher* session = publisher.session())
+      resend_ = nh_.advertiseService<Request, Response>(
+          "session/resend", [session](Request&, Response& response) {
+            session->resend();
+            response.success = true;
+            response.message = "run " + std::to_string(session->run());
+            return true;
+          });
+    spinner_.start();
+  }
+  // The services that write the map (and the OctoMap, when one is written).
+  std::string describe() const {
+    return save_map_.getService() + ", " + snapshot_.getService() +
+           (octomap_.empty() ? "" : ", " + save_octomap_.getService());
+  }
+  void stop() { spinner_.stop(); }
+
+ private:
+  std::string octomap_;
+  ros::CallbackQueue queue_;
+  ros::NodeHandle nh_{"~"};
+  ros::ServiceServer save_map_, snapshot_, save_octomap_, resend_;
+  ros::AsyncSpinner spinner_{1, &queue_};
+};
+
+// What became of the camera's images, logged, and the run's statistics with the node's counts
+// written to `stats_file` ("" = none).
+void reportAtEnd(const TopicSource::Counts& counts, const RunStats& stats, RosPublisher& publisher,
+                 const std::string& stats_file) {
+  spdlog::info(
+      "rgbdmap_node: {} colour images received ({} lost before the node), {} pairs, {} dropped "
+      "by the node ({} in its buffer, {} in the queue), {} frames mapped, {} maps published",
+      counts.color_received, counts.color_lost, counts.paired,
+      counts.buffer_dropped + stats.frames_dropped.load(), counts.buffer_dropped,
+      stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
+  if (stats_file.empty()) return;
+  std::ofstream out(stats_file);
+  SessionPublisher* session = publisher.session();
+  out << withNodeCounts(stats.toJson(), counts, publisher.mapsPublished(),
+                        session ? session->totals() : SessionStream::Totals{},
+                        session ? session->keyframesDropped() : 0);
+  if (!out) spdlog::error("{}: cannot write statistics", stats_file);
+}
+
 int runNode(RunControl& control, RunSignals& signals) {
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -85,20 +192,11 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.loadPreset(settings.config);
   applyPrivateParams(pnh, config);
   checkOutputFolder(settings.out, "~out");
-  // Read before waiting for the camera: a session that cannot be used stops the node at once.
-  const std::shared_ptr<const Session> localise_in =
-      settings.localise.empty() ? nullptr
-                                : openSessionToStartFrom(settings.localise, settings.out,
-                                                         pnh.resolveName("localise"), true);
-  const std::shared_ptr<const Session> continued =
-      settings.continue_from.empty() ? nullptr
-                                     : openSessionToStartFrom(settings.continue_from, settings.out,
-                                                              pnh.resolveName("continue"), false);
-  if ((localise_in || continued) && config.pose.source == "auto") config.pose.source = "odometry";
-  if (continued && !config.loop.enabled)
-    throw InputError(pnh.resolveName("continue") +
-                     ": goes on from the saved map with loop closure (its places and graph); "
-                     "loop/enabled=false turns it off");
+  // Chosen before waiting for the camera: a session that cannot be used stops the node at once.
+  const std::shared_ptr<const RunMode> mode =
+      chooseRunMode({settings.out, settings.localise, settings.continue_from, false,
+                     !settings.grid.empty(), settings.octomap_given},
+                    config, nodeNames(pnh));
 
   // Image callbacks on the global queue, one thread: the pairer sees messages in order.
   ros::AsyncSpinner image_spinner(1);
@@ -113,11 +211,7 @@ int runNode(RunControl& control, RunSignals& signals) {
   config.pose.source = resolvePoseSource(
       config.pose.source, topics.providesPoses(),
       "pose.source=groundtruth: a ROS camera has no ground truth; use odometry or trajectory");
-  if ((localise_in || continued) && !tracksKeyframes(config.pose, config.tracking))
-    throw InputError(pnh.resolveName(localise_in ? "localise" : "continue") +
-                     ": needs the camera's odometry (pose/source=odometry, tracking/method=dense)");
-  PipelineOutputs outputs =
-      localise_in ? localisationOutputs(settings.out) : outputsBeside(settings.out);
+  PipelineOutputs outputs = mode->outputs(settings.out, "");
   outputs.grid_path = settings.grid;
   outputs.octomap_path = settings.octomap;
   if (!signals.runStarts({temporaryFiles(outputs)})) {
@@ -126,106 +220,35 @@ int runNode(RunControl& control, RunSignals& signals) {
     return 0;
   }
 
-  RosPublisher::Options publish;
-  publish.map_frame = settings.map_frame;
-  publish.camera_frame = !settings.camera_frame.empty()  ? settings.camera_frame
-                         : !topics.cameraFrame().empty() ? topics.cameraFrame()
-                                                         : "camera_rgb_optical_frame";
-  if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
-    publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
-  publish.map_interval = settings.map_interval;
-  publish.grid_interval = settings.grid_interval;
-  publish.up = config.up;
-  publish.grid = config.grid;
-  // Only a mapping run has a session to stream (localising adds nothing to the saved one).
-  publish.session.interval = localise_in ? 0.0 : settings.session_interval;
-  publish.session.stream.bytes_per_second = settings.session_rate;
-  publish.session.lossless = settings.lossless;
+  const RosPublisher::Options publish = publisherOptions(settings, topics, config, *mode);
   RosPublisher publisher(pnh, publish);
 
   outputs.status_line = false;
   outputs.publisher = &publisher;
   spdlog::info("configuration (preset {}):\n{}", config.preset, config.toYaml());
-  Pipeline pipeline(
-      config, std::move(source), outputs, localise_in ? localise_in : continued,
-      localise_in ? Pipeline::SessionUse::kLocalise : Pipeline::SessionUse::kContinue);
+  Pipeline pipeline(config, std::move(source), outputs, mode);
 
-  // Services on a queue and thread of their own: a call waits for its checkpoint without
-  // holding up the image callbacks.
-  ros::CallbackQueue service_queue;
-  ros::NodeHandle service_nh("~");
-  service_nh.setCallbackQueue(&service_queue);
-  const auto handler = [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-    // Localising, a save writes the trajectory alone.
-    return writeMapNow(control, pipeline.stats(),
-                       localise_in ? outputs.frame_trajectory_path : settings.out, response);
-  };
-  ros::ServiceServer save_map =
-      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-          "save_map", handler);
-  ros::ServiceServer snapshot =
-      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-          "snapshot", handler);
-  ros::ServiceServer save_octomap =
-      service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-          "save_octomap", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-            writeMapNow(control, pipeline.stats(), settings.octomap, response);
-            if (response.success) response.message = settings.octomap;
-            return true;
-          });
-  ros::ServiceServer resend;
-  if (publisher.session())
-    resend = service_nh.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
-        "session/resend", [&](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-          publisher.session()->resend();
-          response.success = true;
-          response.message = "run " + std::to_string(publisher.session()->run());
-          return true;
-        });
-  ros::AsyncSpinner service_spinner(1, &service_queue);
-  service_spinner.start();
+  NodeServices services(control, pipeline, publisher,
+                        mode->maps() ? settings.out : outputs.frame_trajectory_path,
+                        settings.octomap);
+  // What the node publishes (localising: the pose alone) and the services that write the map.
+  const std::string published = mode->maps()
+                                    ? fmt::format("{}, {} and {}", pnh.resolveName("map"),
+                                                  pnh.resolveName("grid"), pnh.resolveName("pose"))
+                                    : pnh.resolveName("pose");
+  spdlog::info("{}: publishing {}, TF {} -> {}{}", mode->name(), published, publish.map_frame,
+               publish.camera_frame, mode->maps() ? "; services " + services.describe() : "");
   if (settings.lossless)
     spdlog::info(
         "lossless: every image is kept until mapped; {} says how far the node has got "
         "(rgbdmap-play waits for it)",
         pnh.resolveName("intake"));
-  if (localise_in)
-    spdlog::info("localising in {}: publishing {} and TF {} -> {} in the saved map's frame",
-                 settings.localise, pnh.resolveName("pose"), publish.map_frame,
-                 publish.camera_frame);
-  else if (continued)
-    spdlog::info(
-        "continuing {}: publishing {}, {} and {}, TF {} -> {} (in the saved map's frame "
-        "once recognised); services {} and {}",
-        settings.continue_from, pnh.resolveName("map"), pnh.resolveName("grid"),
-        pnh.resolveName("pose"), publish.map_frame, publish.camera_frame, save_map.getService(),
-        snapshot.getService());
-  else
-    spdlog::info("mapping: publishing {}, {} and {}, TF {} -> {}; services {}, {} and {}",
-                 pnh.resolveName("map"), pnh.resolveName("grid"), pnh.resolveName("pose"),
-                 publish.map_frame, publish.camera_frame, save_map.getService(),
-                 snapshot.getService(), save_octomap.getService());
 
   const int code = pipeline.run(control);
   topics.shutdown();
   publisher.finish();
-  const TopicSource::Counts counts = topics.counts();
-  const RunStats& stats = pipeline.stats();
-  spdlog::info(
-      "rgbdmap_node: {} colour images received ({} lost before the node), {} pairs, {} dropped "
-      "by the node ({} in its buffer, {} in the queue), {} frames mapped, {} maps published",
-      counts.color_received, counts.color_lost, counts.paired,
-      counts.buffer_dropped + stats.frames_dropped.load(), counts.buffer_dropped,
-      stats.frames_dropped.load(), stats.frames_processed.load(), publisher.mapsPublished());
-  if (!settings.stats.empty()) {
-    std::ofstream out(settings.stats);
-    SessionPublisher* session = publisher.session();
-    out << withNodeCounts(stats.toJson(), counts, publisher.mapsPublished(),
-                          session ? session->totals() : SessionStream::Totals{},
-                          session ? session->keyframesDropped() : 0);
-    if (!out) spdlog::error("{}: cannot write statistics", settings.stats);
-  }
-  service_spinner.stop();
+  reportAtEnd(topics.counts(), pipeline.stats(), publisher, settings.stats);
+  services.stop();
   image_spinner.stop();
   return code;
 }

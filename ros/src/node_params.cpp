@@ -73,24 +73,16 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
     throw InputError("parameter " + nh.resolveName("session_rate") + ": must be > 0 (bytes/s)");
   s.grid = stringParam(nh, "grid", "");
   s.octomap = stringParam(nh, "octomap", stem(s.out) + ".bt");
+  s.octomap_given = nh.hasParam("octomap");
   s.localise = stringParam(nh, "localise", "");
-  if (!s.localise.empty()) {
-    if (nh.hasParam("grid") || nh.hasParam("octomap"))
-      throw InputError("parameter " + nh.resolveName("localise") +
-                       ": nothing is mapped while localising (no ~grid or ~octomap)");
-    s.octomap.clear();
-  }
   s.lossless = boolParam(nh, "lossless", false);
   s.continue_from = stringParam(nh, "continue", "");
-  if (!s.continue_from.empty()) {
-    if (!s.localise.empty())
-      throw InputError("parameter " + nh.resolveName("continue") + ": localising (" +
-                       nh.resolveName("localise") + ") maps nothing to continue; give one");
-    if (nh.hasParam("octomap"))
-      throw InputError("parameter " + nh.resolveName("continue") +
-                       ": a session keeps no free space to go on from (no ~octomap)");
-    s.octomap.clear();
-  }
+  if (!s.continue_from.empty() && !s.localise.empty())
+    throw InputError("parameter " + nh.resolveName("continue") + ": localising (" +
+                     nh.resolveName("localise") + ") maps nothing to continue; give one");
+  // Localising maps nothing and a continued session keeps no free space: no OctoMap beside ~out
+  // (one asked for is refused, chooseRunMode).
+  if (!s.localise.empty() || !s.continue_from.empty()) s.octomap.clear();
   return s;
 }
 

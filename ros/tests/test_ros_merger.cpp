@@ -13,7 +13,7 @@
 #include <filesystem>
 
 #include "rgbdmap/capture/trajectory.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "ros_test_support.hpp"
 #include "session_runs.hpp"
 

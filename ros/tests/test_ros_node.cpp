@@ -20,8 +20,8 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 #include "ros_test_support.hpp"
 
 namespace rgbdmap::test {

@@ -12,8 +12,8 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/ros/rosbag_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
 #include "ros_test_support.hpp"
 
 namespace rgbdmap::test {

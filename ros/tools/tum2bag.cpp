@@ -16,7 +16,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/text_lines.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 
 namespace {

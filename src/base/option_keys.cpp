@@ -1,7 +1,9 @@
 #include "rgbdmap/base/option_keys.hpp"
 
+#include <spdlog/spdlog.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -57,7 +59,7 @@ Key number(const std::string& name, double* field, double lo, double hi, const s
                                           formatNumber(hi) + "]");
             *field = v;
           },
-          [=] { return formatNumber(*field); }};
+          [=] { return formatNumber(*field); }, ""};
 }
 
 Key integer(const std::string& name, int* field, int lo, int hi, const std::string& help) {
@@ -77,7 +79,7 @@ Key integer(const std::string& name, int* field, int lo, int hi, const std::stri
                                           std::to_string(hi) + "]");
             *field = static_cast<int>(v);
           },
-          [=] { return std::to_string(*field); }};
+          [=] { return std::to_string(*field); }, ""};
 }
 
 Key boolean(const std::string& name, bool* field, const std::string& help) {
@@ -90,7 +92,7 @@ Key boolean(const std::string& name, bool* field, const std::string& help) {
             else
               throw std::invalid_argument("'" + text + "' is not true or false");
           },
-          [=] { return std::string(*field ? "true" : "false"); }};
+          [=] { return std::string(*field ? "true" : "false"); }, ""};
 }
 
 Key choice(const std::string& name, std::string* field, std::vector<std::string> options,
@@ -106,11 +108,12 @@ Key choice(const std::string& name, std::string* field, std::vector<std::string>
             for (const std::string& o : options) list += (list.empty() ? "" : ", ") + o;
             throw std::invalid_argument("'" + text + "' is not one of " + list);
           },
-          [=] { return *field; }};
+          [=] { return *field; }, ""};
 }
 
 Key text(const std::string& name, std::string* field, const std::string& help) {
-  return {name, help, [=](const std::string& value) { *field = value; }, [=] { return *field; }};
+  return {name, help, [=](const std::string& value) { *field = value; }, [=] { return *field; },
+          ""};
 }
 
 Key checked(Key key, std::function<void()> check) {
@@ -121,12 +124,23 @@ Key checked(Key key, std::function<void()> check) {
   return key;
 }
 
+Key formerName(const std::string& old_name, const Key& now) {
+  Key former = now;
+  former.name = old_name;
+  former.help = "former name of " + now.name;
+  former.replaced_by = now.name;
+  return former;
+}
+
 void append(Keys& keys, Keys more) {
   for (Key& k : more) keys.push_back(std::move(k));
 }
 
-void setKey(Keys& keys, const std::string& key, const std::string& value,
-            const std::string& origin) {
+namespace {
+
+// Sets one key (see setKey) and returns it.
+const Key& setOne(Keys& keys, const std::string& key, const std::string& value,
+                  const std::string& origin) {
   for (Key& k : keys) {
     if (k.name != key) continue;
     try {
@@ -134,9 +148,40 @@ void setKey(Keys& keys, const std::string& key, const std::string& value,
     } catch (const std::invalid_argument& e) {
       throw InputError(origin + ": " + key + ": " + e.what());
     }
-    return;
+    return k;
   }
   throw InputError(origin + ": unknown config key '" + key + "' (see `rgbdmap --list-keys`)");
+}
+
+// "tracking.undistort and filter.undistort are now camera.undistort": the former names read, by
+// the key each is now.
+std::string formerNamesNow(const std::vector<const Key*>& read) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> by_key;
+  for (const Key* k : read) {
+    auto at = std::find_if(by_key.begin(), by_key.end(),
+                           [k](const auto& entry) { return entry.first == k->replaced_by; });
+    if (at == by_key.end()) at = by_key.insert(by_key.end(), {k->replaced_by, {}});
+    if (std::find(at->second.begin(), at->second.end(), k->name) == at->second.end())
+      at->second.push_back(k->name);
+  }
+  std::string text;
+  for (const auto& [now, names] : by_key) {
+    std::string former;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      former += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+    text +=
+        (text.empty() ? "" : "; ") + former + (names.size() > 1 ? " are" : " is") + " now " + now;
+  }
+  return text;
+}
+
+}  // namespace
+
+void setKey(Keys& keys, const std::string& key, const std::string& value,
+            const std::string& origin) {
+  const Key& set = setOne(keys, key, value, origin);
+  if (!set.replaced_by.empty())
+    spdlog::warn("{}: {} (a former name, still read)", origin, formerNamesNow({&set}));
 }
 
 void loadYamlKeys(Keys& keys, const std::string& path, std::string& preset) {
@@ -152,6 +197,7 @@ void loadYamlKeys(Keys& keys, const std::string& path, std::string& preset) {
   if (!root.IsMap()) throw InputError(path + ": expected a map of config sections");
   std::vector<std::pair<std::string, YAML::Node>> items;
   flatten(root, "", items);
+  std::vector<const Key*> former;  // former names read
   for (const auto& [key, node] : items) {
     const std::string origin = path + ":" + std::to_string(node.Mark().line + 1);
     if (key == "preset") {
@@ -159,8 +205,11 @@ void loadYamlKeys(Keys& keys, const std::string& path, std::string& preset) {
       continue;
     }
     if (!node.IsScalar()) throw InputError(origin + ": " + key + ": expected a single value");
-    setKey(keys, key, node.as<std::string>(), origin);
+    const Key& set = setOne(keys, key, node.as<std::string>(), origin);
+    if (!set.replaced_by.empty()) former.push_back(&set);
   }
+  if (!former.empty())
+    spdlog::warn("{}: {} (former names, still read)", path, formerNamesNow(former));
 }
 
 std::string presetDirectory() { return RGBDMAP_CONFIG_DIR; }
@@ -182,6 +231,7 @@ std::string keysToYaml(const Keys& keys, const std::string& preset) {
   out << "\n";
   std::string section;
   for (const Key& k : keys) {
+    if (!k.replaced_by.empty()) continue;
     const std::string s = k.name.substr(0, k.name.find('.'));
     if (s != section) {
       section = s;
@@ -203,7 +253,8 @@ std::string listKeys(const Keys& keys, bool markdown) {
       return text;
     };
     for (const Key& k : keys)
-      list += pad(k.name, 28) + " " + pad(k.get(), 12) + " " + k.help + "\n";
+      if (k.replaced_by.empty())
+        list += pad(k.name, 28) + " " + pad(k.get(), 12) + " " + k.help + "\n";
     return list;
   }
   auto escape = [](std::string text) {
@@ -213,6 +264,7 @@ std::string listKeys(const Keys& keys, bool markdown) {
   };
   list = "| key | default | meaning |\n| --- | --- | --- |\n";
   for (const Key& k : keys) {
+    if (!k.replaced_by.empty()) continue;
     const std::string value = k.get();
     list += "| `" + k.name + "` | " + (value.empty() ? "" : "`" + escape(value) + "`") + " | " +
             escape(k.help) + " |\n";

@@ -209,22 +209,54 @@ PngDecoder::~PngDecoder() = default;
 PngDecoder::PngDecoder(PngDecoder&&) noexcept = default;
 PngDecoder& PngDecoder::operator=(PngDecoder&&) noexcept = default;
 
-PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size, Mode mode,
-                                      cv::Mat& out, std::string& error) {
-  const auto corrupt = [&](const std::string& why) {
-    error = why;
-    return Status::kCorrupt;
-  };
-  if (size < sizeof(kSignature) || !std::equal(kSignature, kSignature + 8, data))
-    return corrupt("not a PNG file (bad signature)");
+namespace {
 
-  // The chunks: IHDR first, then any, with the image data in consecutive IDAT chunks, up to
-  // IEND. Only critical chunks (IHDR, PLTE, IDAT, IEND) have their CRC checked: libpng discards
-  // an ancillary chunk with a bad CRC and decodes the image regardless, and none of them changes
-  // what is decoded here.
+// What the chunks give: the image's size and layout and how much image data (IDAT) there is.
+struct PngImage {
   std::uint32_t width = 0, height = 0;
   std::optional<Layout> layout;
   std::size_t compressed_size = 0;
+};
+
+// The IHDR chunk's `body` (13 bytes): the image's size and layout. kDecoded when it is an image
+// this decoder decodes.
+PngDecoder::Status readHeader(const std::uint8_t* body, PngDecoder::Mode mode, PngImage& image,
+                              std::string& error) {
+  const auto corrupt = [&](const std::string& why) {
+    error = why;
+    return PngDecoder::Status::kCorrupt;
+  };
+  image.width = bigEndian32(body);
+  image.height = bigEndian32(body + 4);
+  const int bit_depth = body[8], colour_type = body[9], interlace = body[12];
+  if (image.width == 0 || image.height == 0 || image.width > kMaxChunkLength ||
+      image.height > kMaxChunkLength)
+    return corrupt("invalid image size " + std::to_string(image.width) + "x" +
+                   std::to_string(image.height));
+  if (!validDepthForType(bit_depth, colour_type))
+    return corrupt("invalid bit depth " + std::to_string(bit_depth) + " for colour type " +
+                   std::to_string(colour_type));
+  if (body[10] != 0 || body[11] != 0 || interlace > 1)
+    return corrupt("unknown compression, filter or interlace method in IHDR");
+  image.layout = layoutFor(mode, bit_depth, colour_type, interlace);
+  if (!image.layout || image.width > kMaxSide || image.height > kMaxSide ||
+      std::uint64_t{image.width} * image.height > kMaxPixels)
+    return PngDecoder::Status::kUnsupported;
+  return PngDecoder::Status::kDecoded;
+}
+
+// The chunks: IHDR first, then any, with the image data in consecutive IDAT chunks (appended to
+// `compressed`), up to IEND. Only critical chunks (IHDR, PLTE, IDAT, IEND) have their CRC
+// checked: libpng discards an ancillary chunk with a bad CRC and decodes the image regardless,
+// and none of them changes what is decoded here. kDecoded when they hold an image this decoder
+// decodes.
+PngDecoder::Status readChunks(const std::uint8_t* data, std::size_t size, PngDecoder::Mode mode,
+                              std::vector<std::uint8_t>& compressed, PngImage& image,
+                              std::string& error) {
+  const auto corrupt = [&](const std::string& why) {
+    error = why;
+    return PngDecoder::Status::kCorrupt;
+  };
   enum class Idat { kBefore, kIn, kAfter } idat = Idat::kBefore;
   for (std::size_t pos = sizeof(kSignature);;) {
     // Messages are built only on failure: a frame's decoding allocates nothing.
@@ -246,48 +278,54 @@ PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size
     if (critical && libdeflate_crc32(0, type, length + 4) != bigEndian32(body + length))
       return corrupt("bad CRC in " + name());
 
-    if (width == 0) {  // the first chunk
+    if (image.width == 0) {  // the first chunk
       if (!isType(type, "IHDR")) return corrupt("the first chunk is " + typeName(type));
       if (length != 13)
         return corrupt(name() + " has " + std::to_string(length) + " bytes, not 13");
-      width = bigEndian32(body);
-      height = bigEndian32(body + 4);
-      const int bit_depth = body[8], colour_type = body[9], interlace = body[12];
-      if (width == 0 || height == 0 || width > kMaxChunkLength || height > kMaxChunkLength)
-        return corrupt("invalid image size " + std::to_string(width) + "x" +
-                       std::to_string(height));
-      if (!validDepthForType(bit_depth, colour_type))
-        return corrupt("invalid bit depth " + std::to_string(bit_depth) + " for colour type " +
-                       std::to_string(colour_type));
-      if (body[10] != 0 || body[11] != 0 || interlace > 1)
-        return corrupt("unknown compression, filter or interlace method in IHDR");
-      layout = layoutFor(mode, bit_depth, colour_type, interlace);
-      if (!layout || width > kMaxSide || height > kMaxSide ||
-          std::uint64_t{width} * height > kMaxPixels)
-        return Status::kUnsupported;
+      const PngDecoder::Status header = readHeader(body, mode, image, error);
+      if (header != PngDecoder::Status::kDecoded) return header;
     } else if (isType(type, "IHDR")) {
       return corrupt("a second IHDR chunk" + at());
     } else if (isType(type, "IDAT")) {
       // libpng reads image data split by other chunks only as far as it needs it.
-      if (idat == Idat::kAfter) return Status::kUnsupported;
+      if (idat == Idat::kAfter) return PngDecoder::Status::kUnsupported;
       idat = Idat::kIn;
-      if (compressed_.size() < compressed_size + length)
-        compressed_.resize(compressed_size + length);
-      std::memcpy(compressed_.data() + compressed_size, body, length);
-      compressed_size += length;
+      if (compressed.size() < image.compressed_size + length)
+        compressed.resize(image.compressed_size + length);
+      std::memcpy(compressed.data() + image.compressed_size, body, length);
+      image.compressed_size += length;
     } else if (isType(type, "IEND")) {
       break;
     } else {
       if (idat == Idat::kIn) idat = Idat::kAfter;
       // libpng refuses unknown critical chunks; PLTE is a suggestion for RGB and is ignored
       // (as libpng ignores it) for grey.
-      if (critical && !isType(type, "PLTE")) return Status::kUnsupported;
+      if (critical && !isType(type, "PLTE")) return PngDecoder::Status::kUnsupported;
     }
     pos += kChunkOverhead + length;
   }
   if (idat == Idat::kBefore) return corrupt("no IDAT chunk");
+  return PngDecoder::Status::kDecoded;
+}
 
-  const std::size_t pixel_bytes = static_cast<std::size_t>(bytesPerPixel(*layout));
+}  // namespace
+
+PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size, Mode mode,
+                                      cv::Mat& out, std::string& error) {
+  const auto corrupt = [&](const std::string& why) {
+    error = why;
+    return Status::kCorrupt;
+  };
+  if (size < sizeof(kSignature) || !std::equal(kSignature, kSignature + 8, data))
+    return corrupt("not a PNG file (bad signature)");
+  PngImage image;
+  const Status read = readChunks(data, size, mode, compressed_, image, error);
+  if (read != Status::kDecoded) return read;
+  const std::uint32_t width = image.width, height = image.height;
+  const Layout layout = *image.layout;
+  const std::size_t compressed_size = image.compressed_size;
+
+  const std::size_t pixel_bytes = static_cast<std::size_t>(bytesPerPixel(layout));
   const std::size_t stride = 1 + std::size_t{width} * pixel_bytes;
   const std::size_t scan_size = stride * height;
   const auto image_size = [&] { return std::to_string(width) + "x" + std::to_string(height); };
@@ -324,12 +362,12 @@ PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size
   if (zero_row_.size() < stride) zero_row_.resize(stride);  // only ever read
   try {
     out.create(static_cast<int>(height), static_cast<int>(width),
-               *layout == Layout::kGrey16 ? CV_16UC1 : CV_8UC3);
+               layout == Layout::kGrey16 ? CV_16UC1 : CV_8UC3);
   } catch (const cv::Exception&) {
     return corrupt("no memory for a " + image_size() + " image");
   }
 
-  switch (*layout) {
+  switch (layout) {
     case Layout::kRgb8:
       decodeImage<RgbToBgr>(scanlines_.data(), width, height, zero_row_.data(), out);
       break;

@@ -67,26 +67,15 @@ bool PngEncoder::supports(const cv::Mat& image) {
   }
 }
 
-bool PngEncoder::encode(const cv::Mat& image, std::vector<std::uint8_t>& png, std::string& error) {
-  if (!supports(image)) {
-    error = "PNG holds 8-bit grey, colour or colour with alpha, or 16-bit grey or colour images";
-    return false;
-  }
-  if (!deflater_) {
-    error = "cannot set up PNG compression (out of memory)";
-    return false;
-  }
-  const int channels = image.channels();
-  const int sample_bytes = static_cast<int>(image.elemSize1());
-  const std::size_t pixel_bytes = static_cast<std::size_t>(channels) * sample_bytes;
-  const std::size_t row_bytes = pixel_bytes * static_cast<std::size_t>(image.cols);
-  const std::size_t rows = static_cast<std::size_t>(image.rows);
+namespace {
 
-  // The rows as PNG samples: RGB(A) order, big-endian 16-bit values.
-  raw_.resize(row_bytes * rows);
+// The image's rows as PNG samples: RGB(A) order, big-endian 16-bit values.
+void toPngSamples(const cv::Mat& image, std::size_t row_bytes, std::vector<std::uint8_t>& raw) {
+  const int channels = image.channels();
+  raw.resize(row_bytes * static_cast<std::size_t>(image.rows));
   for (int v = 0; v < image.rows; ++v) {
-    std::uint8_t* out = raw_.data() + static_cast<std::size_t>(v) * row_bytes;
-    if (sample_bytes == 1) {
+    std::uint8_t* out = raw.data() + static_cast<std::size_t>(v) * row_bytes;
+    if (image.elemSize1() == 1) {
       const std::uint8_t* in = image.ptr<std::uint8_t>(v);
       if (channels == 1) {
         std::memcpy(out, in, row_bytes);
@@ -109,16 +98,21 @@ bool PngEncoder::encode(const cv::Mat& image, std::vector<std::uint8_t>& png, st
       }
     }
   }
+}
 
-  // Filters: each row takes the one (None, Sub, Up, Average, Paeth) whose output costs least.
-  const std::size_t bpp = pixel_bytes;  // bytes back to the corresponding byte of the left pixel
-  filtered_.resize((row_bytes + 1) * rows);
-  candidate_.resize(5 * row_bytes);
+// Filters: each row of `raw` takes the one (None, Sub, Up, Average, Paeth) whose output costs
+// least, written after its filter byte to `filtered`. `bpp`: bytes back to the corresponding byte
+// of the left pixel; `candidate`: room for the five filters' rows.
+void filterRows(const std::vector<std::uint8_t>& raw, std::size_t row_bytes, std::size_t rows,
+                std::size_t bpp, std::vector<std::uint8_t>& filtered,
+                std::vector<std::uint8_t>& candidate) {
+  filtered.resize((row_bytes + 1) * rows);
+  candidate.resize(5 * row_bytes);
   const std::vector<std::uint8_t> zero(row_bytes, 0);
   for (std::size_t v = 0; v < rows; ++v) {
-    const std::uint8_t* row = raw_.data() + v * row_bytes;
+    const std::uint8_t* row = raw.data() + v * row_bytes;
     const std::uint8_t* up = v == 0 ? zero.data() : row - row_bytes;
-    std::uint8_t* none = candidate_.data();
+    std::uint8_t* none = candidate.data();
     std::uint8_t* sub = none + row_bytes;
     std::uint8_t* above = sub + row_bytes;
     std::uint8_t* average = above + row_bytes;
@@ -136,16 +130,37 @@ bool PngEncoder::encode(const cv::Mat& image, std::vector<std::uint8_t>& png, st
     int best = 0;
     std::uint64_t best_cost = UINT64_MAX;
     for (int f = 0; f < 5; ++f) {
-      const std::uint64_t c = cost(candidate_.data() + f * row_bytes, row_bytes);
+      const std::uint64_t c = cost(candidate.data() + f * row_bytes, row_bytes);
       if (c < best_cost) {
         best_cost = c;
         best = f;
       }
     }
-    std::uint8_t* out = filtered_.data() + v * (row_bytes + 1);
+    std::uint8_t* out = filtered.data() + v * (row_bytes + 1);
     out[0] = static_cast<std::uint8_t>(best);
-    std::memcpy(out + 1, candidate_.data() + best * row_bytes, row_bytes);
+    std::memcpy(out + 1, candidate.data() + best * row_bytes, row_bytes);
   }
+}
+
+}  // namespace
+
+bool PngEncoder::encode(const cv::Mat& image, std::vector<std::uint8_t>& png, std::string& error) {
+  if (!supports(image)) {
+    error = "PNG holds 8-bit grey, colour or colour with alpha, or 16-bit grey or colour images";
+    return false;
+  }
+  if (!deflater_) {
+    error = "cannot set up PNG compression (out of memory)";
+    return false;
+  }
+  const int channels = image.channels();
+  const int sample_bytes = static_cast<int>(image.elemSize1());
+  const std::size_t pixel_bytes = static_cast<std::size_t>(channels) * sample_bytes;
+  const std::size_t row_bytes = pixel_bytes * static_cast<std::size_t>(image.cols);
+  const std::size_t rows = static_cast<std::size_t>(image.rows);
+
+  toPngSamples(image, row_bytes, raw_);
+  filterRows(raw_, row_bytes, rows, pixel_bytes, filtered_, candidate_);
 
   png.clear();
   png.insert(png.end(), std::begin(kSignature), std::end(kSignature));

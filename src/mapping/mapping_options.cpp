@@ -25,7 +25,6 @@ Keys filterKeys(FilterOptions& o) {
   Keys keys = {
       number("filter.min_depth", &o.min_depth, 0, 100, "nearest depth used (m)"),
       number("filter.max_depth", &o.max_depth, 0.01, 100, "farthest depth used (m)"),
-      boolean("filter.undistort", &o.undistort, "undo lens distortion when the camera has it"),
       choice("filter.outliers", &o.outliers, {"fast", "statistical", "none"},
              "fast: flying pixels and specks on the depth image; statistical: PCL's SOR"),
       number("filter.edge_jump", &o.edge_jump, 0.001, 1,

@@ -234,29 +234,103 @@ void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {
   });
 }
 
+namespace {
+
+// A row of 8 voxels as vectors (GCC's vector extension: AVX in the x86-64-v3 clone of
+// TsdfIntegrator::fuseBlock, pairs of SSE registers in the other).
+constexpr int kRow = VoxelMap::kBlockEdge;
+using RowFloats = float __attribute__((vector_size(4 * kRow)));
+using RowInts = std::int32_t __attribute__((vector_size(4 * kRow)));
+using RowWords = std::uint32_t __attribute__((vector_size(8 * kRow)));
+// Unsigned where bits are packed and moved: shifts and sums on them must not overflow an int.
+// (A C-style cast between vector types of one size keeps the bits.)
+using RowUints = std::uint32_t __attribute__((vector_size(4 * kRow)));
+static_assert(sizeof(VoxelMap::Voxel) == 8 && offsetof(VoxelMap::Voxel, weight_steps) == 2 &&
+                  offsetof(VoxelMap::Voxel, r) == 4 && offsetof(VoxelMap::Voxel, observations) == 7,
+              "a voxel is two 32-bit words as read below");
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "voxel words are read little-endian");
+static_assert(kRow == 8, "a row of voxels is one vector of 8");
+
+// What a view measured along a row of voxels: the signed distance to the surface, the band, the
+// weight, which voxels it updates, which of those are near the surface, and the colour pixel
+// each saw (-1: none).
+struct RowMeasurement {
+  RowFloats sdf, band, weight;
+  RowInts update, near, colour_pixel;
+};
+
+// The row's voxels updated by `m` (Voxel::set and the colour blend, eight at a time). Inlined
+// into both clones of fuseBlock: a vector function of its own would take the baseline's
+// registers; and it takes its vectors by reference (by value, AVX vectors change the ABI).
+[[gnu::always_inline]] inline void updateRow(const RowMeasurement& m, const std::uint8_t* color,
+                                             VoxelMap::Voxel* row) {
+  using Voxel = VoxelMap::Voxel;
+  // The row's 8 voxels as 16 32-bit words: even ones hold the distance (low half) and the
+  // weight, odd ones the colour (r lowest) and the observation count (highest byte).
+  RowWords words;
+  std::memcpy(&words, row, sizeof(words));
+  const RowUints steps_word = __builtin_shufflevector(words, words, 0, 2, 4, 6, 8, 10, 12, 14);
+  const RowUints colour_word = __builtin_shufflevector(words, words, 1, 3, 5, 7, 9, 11, 13, 15);
+  const RowInts old_sdf_steps = (RowInts)(steps_word << 16) >> 16;  // sign-extended
+  const RowInts old_weight_steps = (RowInts)(steps_word >> 16);
+  const RowFloats old_sdf = __builtin_convertvector(old_sdf_steps, RowFloats) * Voxel::kSdfStep;
+  const RowFloats old_weight =
+      __builtin_convertvector(old_weight_steps, RowFloats) * Voxel::kWeightStep;
+  const RowFloats alpha = m.update ? m.weight / (old_weight + m.weight) : 0.0f;
+  const RowFloats target = m.sdf < m.band ? m.sdf : m.band;
+  const RowFloats new_sdf = old_sdf + alpha * (target - old_sdf);
+  const RowFloats summed = old_weight + m.weight;
+  const RowFloats new_weight = summed < Voxel::kMaxWeight ? summed : Voxel::kMaxWeight;
+  // Voxel::set(new_sdf, new_weight), eight at a time.
+  RowFloats s = new_sdf * (1.0f / Voxel::kSdfStep);
+  s = s < -32767.0f ? -32767.0f : s;
+  s = s > 32767.0f ? 32767.0f : s;
+  const RowInts sdf_steps =
+      __builtin_convertvector(m.update ? s + 32768.5f : 32768.0f, RowInts) - 32768;
+  RowFloats ws = new_weight * (1.0f / Voxel::kWeightStep) + 0.5f;
+  ws = ws < 1.0f ? 1.0f : ws;
+  ws = ws > 65535.0f ? 65535.0f : ws;
+  const RowInts weight_steps = __builtin_convertvector(m.update ? ws : 0.0f, RowInts);
+  const RowUints new_steps_word = ((RowUints)sdf_steps & 0xffffu) | ((RowUints)weight_steps << 16);
+
+  // Near the surface: its colour, blended by the measurement's share of the weight. Only the
+  // pixels are fetched one by one.
+  const RowInts coloured = m.update & m.near & (m.colour_pixel >= 0);
+  RowUints seen = colour_word;
+  if (anyOf(coloured)) {
+    for (int x = 0; x < kRow; ++x) {
+      if (!coloured[x]) continue;
+      const std::uint8_t* c = color + 3 * static_cast<std::ptrdiff_t>(m.colour_pixel[x]);
+      seen[x] = c[2] | (c[1] << 8u) | (c[0] << 16u);  // BGR in the image, r lowest here
+    }
+  }
+  const RowUints share = __builtin_convertvector(alpha * 256.0f + 0.5f, RowUints);  // 0 to 256
+  const RowUints keep = 256u - share;
+  RowUints blended = colour_word & 0xff000000u;
+  for (int channel = 0; channel < 24; channel += 8) {
+    const RowUints before = (colour_word >> channel) & 0xffu, after = (seen >> channel) & 0xffu;
+    blended |= ((before * keep + after * share + 128u) >> 8) << channel;
+  }
+  RowUints new_colour_word = coloured ? blended : colour_word;
+  // Observations count up to 255.
+  const RowUints observations = colour_word >> 24;
+  new_colour_word += (m.update & (observations < 255u)) ? RowUints{} + (1u << 24) : RowUints{};
+
+  const RowUints stored_steps = m.update ? new_steps_word : steps_word;
+  words = __builtin_shufflevector(stored_steps, new_colour_word, 0, 8, 1, 9, 2, 10, 3, 11, 4, 12, 5,
+                                  13, 6, 14, 7, 15);
+  std::memcpy(static_cast<void*>(row), &words, sizeof(words));  // trivially copyable
+}
+
+}  // namespace
+
 // Compiled for AVX2 too: the projection of a row of 8 voxels then takes one instruction per step.
 RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
                                                      VoxelMap::Block& block) const {
-  // A row of 8 voxels is updated as one vector (GCC's vector extension: AVX in the x86-64-v3
-  // clone, pairs of SSE registers in the other); only the pixels are fetched one by one. It
+  // A row of 8 voxels is updated as one vector; only the pixels are fetched one by one. It
   // cannot call scalar functions, so it repeats bandAt() and Voxel::set() (with the same named
-  // constants: KinectNoise, Voxel's steps).
-  constexpr int kEdge = VoxelMap::kBlockEdge;
-  using Floats = float __attribute__((vector_size(4 * kEdge)));
-  using Ints = std::int32_t __attribute__((vector_size(4 * kEdge)));
-  using Words = std::uint32_t __attribute__((vector_size(8 * kEdge)));
-  // Unsigned where bits are packed and moved: shifts and sums on them must not overflow an int.
-  // (A C-style cast between vector types of one size keeps the bits.)
-  using Uints = std::uint32_t __attribute__((vector_size(4 * kEdge)));
-  static_assert(sizeof(VoxelMap::Voxel) == 8 && offsetof(VoxelMap::Voxel, weight_steps) == 2 &&
-                    offsetof(VoxelMap::Voxel, r) == 4 &&
-                    offsetof(VoxelMap::Voxel, observations) == 7,
-                "a voxel is two 32-bit words as read below");
-  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "voxel words are read little-endian");
-  const Floats steps = {0, 1, 2, 3, 4, 5, 6, 7};
-  static_assert(kEdge == 8, "a row of voxels is one vector of 8");
-  using Voxel = VoxelMap::Voxel;
-
+  // constants: KinectNoise, Voxel's steps); what it calls is inlined (updateRow).
+  const RowFloats steps = {0, 1, 2, 3, 4, 5, 6, 7};
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   const float fwidth = static_cast<float>(view.width), fheight = static_cast<float>(view.height);
@@ -266,105 +340,50 @@ RGBDMAP_VECTOR_CLONES void TsdfIntegrator::fuseBlock(const ImageView& view,
   const Eigen::Vector3f origin =
       view.world_to_camera *
       ((block.origin.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * view.voxel);
-  for (int z = 0; z < kEdge; ++z) {
-    for (int y = 0; y < kEdge; ++y) {
+  for (int z = 0; z < kRow; ++z) {
+    for (int y = 0; y < kRow; ++y) {
       const Eigen::Vector3f start =
           origin + static_cast<float>(y) * view.dy + static_cast<float>(z) * view.dz;
-      const Floats px = start.x() + steps * view.dx.x();
-      const Floats py = start.y() + steps * view.dx.y();
-      const Floats pz = start.z() + steps * view.dx.z();
-      const Floats inv_z = 1.0f / pz;
-      const Floats uf = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
-      const Floats vf = fy * py * inv_z + cy;
+      const RowFloats px = start.x() + steps * view.dx.x();
+      const RowFloats py = start.y() + steps * view.dx.y();
+      const RowFloats pz = start.z() + steps * view.dx.z();
+      const RowFloats inv_z = 1.0f / pz;
+      const RowFloats uf = fx * px * inv_z + cx;  // + 0.5: truncation rounds to nearest
+      const RowFloats vf = fy * py * inv_z + cy;
       // Behind the camera u and v are anything (NaN included): selected away before converting.
-      const Ints inside =
+      const RowInts inside =
           (pz > 0.0f) & (uf >= 0.0f) & (vf >= 0.0f) & (uf < fwidth) & (vf < fheight);
       if (!anyOf(inside)) continue;
-      const Ints u = __builtin_convertvector(inside ? uf : 0.0f, Ints);
-      const Ints v = __builtin_convertvector(inside ? vf : 0.0f, Ints);
-      const Ints pixel = v * view.width + u;
-      const Ints cell = (v >> cell_bits_) * grid_width_ + (u >> cell_bits_);  // incidenceAt()
-      Floats d, scale;
-      for (int x = 0; x < kEdge; ++x) {
+      const RowInts u = __builtin_convertvector(inside ? uf : 0.0f, RowInts);
+      const RowInts v = __builtin_convertvector(inside ? vf : 0.0f, RowInts);
+      const RowInts pixel = v * view.width + u;
+      const RowInts cell = (v >> cell_bits_) * grid_width_ + (u >> cell_bits_);  // incidenceAt()
+      RowFloats d, scale;
+      for (int x = 0; x < kRow; ++x) {
         d[x] = view.depth[pixel[x]];
         scale[x] = cosine_[cell[x]];
       }
-      const Floats sdf = (d - pz) * scale;              // to the surface, not the pixel
-      const Floats band_from = d - KinectNoise::kFrom;  // kinectDepthSigma(d), the band from it
-      const Floats sigma = KinectNoise::kBase + KinectNoise::kGrowth * band_from * band_from;
-      const Floats wide = sigmas * sigma;
-      const Floats band = wide > narrowest ? wide : narrowest;
+      RowMeasurement m;
+      m.sdf = (d - pz) * scale;                            // to the surface, not the pixel
+      const RowFloats band_from = d - KinectNoise::kFrom;  // kinectDepthSigma(d), the band from it
+      const RowFloats sigma = KinectNoise::kBase + KinectNoise::kGrowth * band_from * band_from;
+      const RowFloats wide = sigmas * sigma;
+      m.band = wide > narrowest ? wide : narrowest;
       // Behind the surface by more than the band: nothing known.
-      const Ints update = inside & (d > 0.0f) & (sdf >= -band);
-      if (!anyOf(update)) continue;
-      const Ints near = sdf < band;
-      Ints colour_pixel = pixel;  // -1: no colour pixel saw this one
+      m.update = inside & (d > 0.0f) & (m.sdf >= -m.band);
+      if (!anyOf(m.update)) continue;
+      m.near = m.sdf < m.band;
+      m.colour_pixel = pixel;  // -1: no colour pixel saw this one
       if (view.color_pixel_of)
-        for (int x = 0; x < kEdge; ++x) colour_pixel[x] = view.color_pixel_of[pixel[x]];
+        for (int x = 0; x < kRow; ++x) m.colour_pixel[x] = view.color_pixel_of[pixel[x]];
       // Free space: as sure as a measurement at the voxel's own depth would be (a far surface
       // seen through a voxel leaves no doubt that it is empty).
-      const Floats weighed_at = (near ? d : pz) - KinectNoise::kFrom;
-      const Floats weighed_sigma =
+      const RowFloats weighed_at = (m.near ? d : pz) - KinectNoise::kFrom;
+      const RowFloats weighed_sigma =
           KinectNoise::kBase + KinectNoise::kGrowth * weighed_at * weighed_at;
-      const Floats ratio = sigma_at_1m / weighed_sigma;
-      const Floats w = update ? ratio * ratio * scale : 0.0f;
-
-      // The row's 8 voxels as 16 32-bit words: even ones hold the distance (low half) and the
-      // weight, odd ones the colour (r lowest) and the observation count (highest byte).
-      Voxel* row = block.voxels.data() + (z * kEdge + y) * kEdge;
-      Words words;
-      std::memcpy(&words, row, sizeof(words));
-      const Uints steps_word = __builtin_shufflevector(words, words, 0, 2, 4, 6, 8, 10, 12, 14);
-      const Uints colour_word = __builtin_shufflevector(words, words, 1, 3, 5, 7, 9, 11, 13, 15);
-      const Ints old_sdf_steps = (Ints)(steps_word << 16) >> 16;  // sign-extended
-      const Ints old_weight_steps = (Ints)(steps_word >> 16);
-      const Floats old_sdf = __builtin_convertvector(old_sdf_steps, Floats) * Voxel::kSdfStep;
-      const Floats old_weight =
-          __builtin_convertvector(old_weight_steps, Floats) * Voxel::kWeightStep;
-      const Floats alpha = update ? w / (old_weight + w) : 0.0f;
-      const Floats target = sdf < band ? sdf : band;
-      const Floats new_sdf = old_sdf + alpha * (target - old_sdf);
-      const Floats summed = old_weight + w;
-      const Floats new_weight = summed < Voxel::kMaxWeight ? summed : Voxel::kMaxWeight;
-      // Voxel::set(new_sdf, new_weight), eight at a time.
-      Floats s = new_sdf * (1.0f / Voxel::kSdfStep);
-      s = s < -32767.0f ? -32767.0f : s;
-      s = s > 32767.0f ? 32767.0f : s;
-      const Ints sdf_steps =
-          __builtin_convertvector(update ? s + 32768.5f : 32768.0f, Ints) - 32768;
-      Floats ws = new_weight * (1.0f / Voxel::kWeightStep) + 0.5f;
-      ws = ws < 1.0f ? 1.0f : ws;
-      ws = ws > 65535.0f ? 65535.0f : ws;
-      const Ints weight_steps = __builtin_convertvector(update ? ws : 0.0f, Ints);
-      const Uints new_steps_word = ((Uints)sdf_steps & 0xffffu) | ((Uints)weight_steps << 16);
-
-      // Near the surface: its colour, blended by the measurement's share of the weight. Only the
-      // pixels are fetched one by one.
-      const Ints coloured = update & near & (colour_pixel >= 0);
-      Uints seen = colour_word;
-      if (anyOf(coloured)) {
-        for (int x = 0; x < kEdge; ++x) {
-          if (!coloured[x]) continue;
-          const std::uint8_t* c = view.color + 3 * static_cast<std::ptrdiff_t>(colour_pixel[x]);
-          seen[x] = c[2] | (c[1] << 8u) | (c[0] << 16u);  // BGR in the image, r lowest here
-        }
-      }
-      const Uints share = __builtin_convertvector(alpha * 256.0f + 0.5f, Uints);  // 0 to 256
-      const Uints keep = 256u - share;
-      Uints blended = colour_word & 0xff000000u;
-      for (int channel = 0; channel < 24; channel += 8) {
-        const Uints before = (colour_word >> channel) & 0xffu, after = (seen >> channel) & 0xffu;
-        blended |= ((before * keep + after * share + 128u) >> 8) << channel;
-      }
-      Uints new_colour_word = coloured ? blended : colour_word;
-      // Observations count up to 255.
-      const Uints observations = colour_word >> 24;
-      new_colour_word += (update & (observations < 255u)) ? Uints{} + (1u << 24) : Uints{};
-
-      const Uints stored_steps = update ? new_steps_word : steps_word;
-      words = __builtin_shufflevector(stored_steps, new_colour_word, 0, 8, 1, 9, 2, 10, 3, 11, 4,
-                                      12, 5, 13, 6, 14, 7, 15);
-      std::memcpy(static_cast<void*>(row), &words, sizeof(words));  // trivially copyable
+      const RowFloats ratio = sigma_at_1m / weighed_sigma;
+      m.weight = m.update ? ratio * ratio * scale : 0.0f;
+      updateRow(m, view.color, block.voxels.data() + (z * kRow + y) * kRow);
     }
   }
 }

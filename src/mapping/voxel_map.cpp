@@ -24,14 +24,7 @@ bool packKey(const Eigen::Vector3i& coords, std::uint64_t& key) {
 // A surface voxel's point, for either point type (pcl::PointXYZRGB or PackedMapPoint).
 template <typename Point>
 Point surfacePoint(const Eigen::Vector3f& p, const VoxelMap::Voxel& v) {
-  Point point;
-  point.x = p.x();
-  point.y = p.y();
-  point.z = p.z();
-  point.r = v.r;
-  point.g = v.g;
-  point.b = v.b;
-  return point;
+  return mapPoint<Point>(p.x(), p.y(), p.z(), v.r, v.g, v.b);
 }
 
 }  // namespace

@@ -7,7 +7,6 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/pipeline.hpp"
 
 namespace rgbdmap {
 namespace {

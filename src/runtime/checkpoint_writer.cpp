@@ -1,115 +1,15 @@
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 
-#include <fcntl.h>
-#include <pcl/io/pcd_io.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <cerrno>
 #include <chrono>
-#include <cstdio>
-#include <cstring>
 #include <vector>
 
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/grid_file.hpp"
-#include "rgbdmap/runtime/octomap_file.hpp"
-#include "rgbdmap/runtime/output_files.hpp"
-#include "rgbdmap/runtime/ply_file.hpp"
+#include "rgbdmap/map_files/grid_file.hpp"
+#include "rgbdmap/map_files/octomap_file.hpp"
+#include "rgbdmap/map_files/pcd_file.hpp"
+#include "rgbdmap/map_files/ply_file.hpp"
 
 namespace rgbdmap {
-namespace {
-
-std::string folderOf(const std::string& path) {
-  const auto slash = path.find_last_of('/');
-  return slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
-}
-
-// "File too large (EFBIG)": the symbolic name for the errors a user can act on.
-std::string describeErrno(int error) {
-  std::string text = std::strerror(error);
-  switch (error) {
-    case EFBIG:
-      return text + " (EFBIG: a file-size limit, ulimit -f)";
-    case ENOSPC:
-      return text + " (ENOSPC)";
-    case EDQUOT:
-      return text + " (EDQUOT)";
-    case EROFS:
-      return text + " (EROFS)";
-    case EACCES:
-      return text + " (EACCES)";
-    default:
-      return text;
-  }
-}
-
-}  // namespace
-
-namespace {
-
-// Binary PCD with fields x y z rgb (16 bytes a point), written with plain write() calls so that
-// every failure comes back as an errno (PCL's writer maps the file, where a full disk is a
-// SIGBUS).
-bool writePcd(const MapCloud& cloud, int fd) {
-  const std::string header =
-      pcl::PCDWriter::generateHeader<pcl::PointXYZRGB>(cloud, static_cast<int>(cloud.size())) +
-      "DATA binary\n";
-  if (!writeAll(fd, header.data(), header.size())) return false;
-  constexpr std::size_t kPointBytes = 16;
-  constexpr std::size_t kChunk = 16384;
-  std::vector<char> buffer(kChunk * kPointBytes);
-  for (std::size_t first = 0; first < cloud.size(); first += kChunk) {
-    const std::size_t count = std::min(kChunk, cloud.size() - first);
-    char* out = buffer.data();
-    for (std::size_t i = first; i < first + count; ++i, out += kPointBytes) {
-      const pcl::PointXYZRGB& p = cloud.points[i];
-      std::memcpy(out, &p.x, 4);
-      std::memcpy(out + 4, &p.y, 4);
-      std::memcpy(out + 8, &p.z, 4);
-      std::memcpy(out + 12, &p.rgba, 4);
-    }
-    if (!writeAll(fd, buffer.data(), count * kPointBytes)) return false;
-  }
-  return true;
-}
-
-}  // namespace
-
-bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
-                         std::string& error) {
-  const std::string tmp = temporaryFileOf(path);
-  const auto fail = [&](const std::string& what, int fd) {
-    const int saved = errno;
-    error = path + ": " + what + " " + tmp + ": " + describeErrno(saved);
-    if (fd >= 0) ::close(fd);
-    std::remove(tmp.c_str());
-    return false;
-  };
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return fail("cannot create", -1);
-  if (!write(fd)) return fail("cannot write", fd);
-  if (::fsync(fd) != 0) return fail("cannot fsync", fd);  // ENOSPC may only show here (NFS)
-  if (::close(fd) != 0) return fail("cannot close", -1);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) return fail("cannot rename into place", -1);
-  // Makes the rename itself durable; the map is complete either way.
-  const int folder = ::open(folderOf(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (folder >= 0) {
-    ::fsync(folder);
-    ::close(folder);
-  }
-  return true;
-}
-
-bool writeBytesAtomically(const std::string& path, const std::string& bytes, std::string& error) {
-  return writeFileAtomically(
-      path, [&bytes](int fd) { return writeAll(fd, bytes.data(), bytes.size()); }, error);
-}
-
-bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error) {
-  return writeFileAtomically(
-      path, [&](int fd) { return writePcd(cloud, fd); }, error);
-}
 
 CheckpointWriter::CheckpointWriter(Callback on_done)
     : on_done_(std::move(on_done)), thread_([this] { run(); }) {}

@@ -5,7 +5,9 @@
 #include <filesystem>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/grid_file.hpp"
+#include "rgbdmap/map_files/atomic_write.hpp"
+#include "rgbdmap/map_files/grid_file.hpp"
+#include "rgbdmap/map_files/trajectory_stream.hpp"
 
 namespace rgbdmap {
 
@@ -14,15 +16,6 @@ std::string stem(const std::string& path) {
   const std::size_t dot = path.find_last_of('.');
   const bool in_file_name = dot != std::string::npos && (slash == std::string::npos || dot > slash);
   return in_file_name ? path.substr(0, dot) : path;
-}
-
-// The pid keeps two runs that write the same map (by mistake) from writing one temporary file.
-std::string temporaryFileOf(const std::string& path) {
-  return path + ".tmp-" + std::to_string(::getpid());
-}
-
-std::string spoolFileOf(const std::string& trajectory_path) {
-  return trajectory_path + ".anchored";
 }
 
 PipelineOutputs outputsBeside(const std::string& map_path, const std::string& mesh_path) {

@@ -13,11 +13,10 @@
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/frame_tracker.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/runtime/run_mode.hpp"
 #include "rgbdmap/runtime/status_line.hpp"
 #include "rgbdmap/runtime/tracking_thread.hpp"
-#include "rgbdmap/runtime/unmapped_frames.hpp"
-#include "rgbdmap/slam/localiser.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 
@@ -59,10 +58,36 @@ Config forSource(Config config, const FrameSource& source) {
   return config;
 }
 
-// A trajectory file streamed as it is recorded (null when not asked for).
-std::shared_ptr<TrajectoryStream> streamTo(const std::string& path,
-                                           const PoseCorrections* corrections) {
-  return path.empty() ? nullptr : std::make_shared<TrajectoryStream>(path, corrections);
+// The trajectories written with every checkpoint: keyframes (from the fusion side) and every frame
+// (from the tracking side), streamed to their files rather than held (null when not asked for).
+struct Trajectories {
+  std::shared_ptr<TrajectoryStream> keyframes, frames;
+  std::vector<CheckpointWriter::TrajectoryFile> files;  // those asked for
+};
+
+Trajectories trajectoriesOf(const PipelineOutputs& outputs, const PoseCorrections* corrections) {
+  Trajectories t;
+  const auto streamTo = [corrections](const std::string& path) {
+    return path.empty() ? nullptr : std::make_shared<TrajectoryStream>(path, corrections);
+  };
+  t.keyframes = streamTo(outputs.trajectory_path);
+  t.frames = streamTo(outputs.frame_trajectory_path);
+  for (const auto& file : {t.keyframes, t.frames})
+    if (file) t.files.push_back(file);
+  return t;
+}
+
+// The effective configuration, written beside the map before mapping (and into every session);
+// says when no session is saved although one would be.
+std::string writeConfiguration(Config& config, const PipelineOutputs& outputs,
+                               const RunStats& stats) {
+  const std::string configuration = config.toYaml();
+  if (!outputs.config_path.empty()) std::ofstream(outputs.config_path) << configuration;
+  if (!stats.loop_closure && config.checkpoint.session && !outputs.session_path.empty())
+    spdlog::info(
+        "session: not saved (it is made of loop closure's places and graph; loop "
+        "closure is off)");
+  return configuration;
 }
 
 // The mesh written with a checkpoint (--mesh), extracted now on the fusion thread (the TSDF
@@ -183,125 +208,39 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
   return exit_code;
 }
 
-// What a localisation run says at its end; 1 when the saved map was never recognised.
-int reportLocalisation(const Localiser::Counts& counts, const RunStats& stats) {
-  const std::uint64_t frames = stats.frames_processed.load();
-  const std::uint64_t unplaced = stats.frames_unplaced.load();
-  if (counts.first_placed < 0) {
-    spdlog::error(
-        "localisation: the saved map was never recognised ({} keyframes looked for); the {} "
-        "frames' poses are written in the run's own frame",
-        stats.keyframes_looked_for.load(), frames);
-    return 1;
-  }
-  spdlog::info(
-      "localisation: {} of {} frames placed in the saved map, {} tracked before it was recognised "
-      "at keyframe {} (written in its frame since); {} placements of {} keyframes looked for{}",
-      frames - std::min(frames, unplaced), frames, unplaced, counts.first_placed,
-      stats.keyframes_placed.load(), stats.keyframes_looked_for.load(),
-      counts.skipped > 0 ? fmt::format(", {} skipped behind the camera", counts.skipped) : "");
-  return 0;
-}
-
-// What a continued run says at its end; 1 when the saved map was never recognised.
-int reportContinuation(const LoopCloser& loop_closer, const RunStats& stats) {
-  if (loop_closer.joinedAt() < 0) {
-    spdlog::error(
-        "continuing: the saved map was never recognised ({} keyframes looked for): the map "
-        "written is this run's own, in its own frame, and no session is saved (it would hold two "
-        "maps in unrelated frames)",
-        stats.keyframes_looked_for.load());
-    return 1;
-  }
-  spdlog::info(
-      "continuing: joined the saved map at keyframe {}; {} frames were tracked before it was "
-      "recognised (written in its frame since)",
-      loop_closer.joinedAt(), stats.frames_unplaced.load());
-  return 0;
-}
-
 }  // namespace
 
 Pipeline::Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs,
-                   std::shared_ptr<const Session> saved, SessionUse use)
+                   std::shared_ptr<const RunMode> mode)
     : config_(std::move(config)),
       source_(std::move(source)),
       outputs_(std::move(outputs)),
-      saved_(std::move(saved)),
-      use_(use) {}
+      mode_(std::move(mode)) {}
 
 int Pipeline::run(RunControl& control) {
   Config config = forSource(config_, *source_);
   const CameraIntrinsics camera = config.camera;
   const bool live = source_->isLive();
-  // Loop closure needs a tracker with keyframes (the dense one); the corrections it publishes
-  // move the trajectories, and the map follows them (Mapper).
-  // Localising, the localiser publishes the corrections instead: the saved map's frame.
-  const bool keyframes = tracksKeyframes(config.pose, config.tracking);
-  const bool localising = saved_ && use_ == SessionUse::kLocalise && keyframes;
-  stats_.loop_closure = !localising && config.loop.enabled && keyframes;
-  // Continuing, loop closure goes on from the saved graph and places.
-  const bool continuing = saved_ && use_ == SessionUse::kContinue && stats_.loop_closure;
-  stats_.localising = localising;
-  std::unique_ptr<PoseCorrections> corrections;
-  std::unique_ptr<LoopCloser> loop_closer;
-  std::unique_ptr<Localiser> localiser;
-  if (stats_.loop_closure || localising) corrections = std::make_unique<PoseCorrections>();
-  if (stats_.loop_closure)
-    loop_closer =
-        std::make_unique<LoopCloser>(config.camera, config.tracking, config.loop,
-                                     config.filter.min_depth, config.filter.max_depth, *corrections,
-                                     stats_, !live, continuing ? &saved_->graph : nullptr);
-  if (localising)
-    localiser = std::make_unique<Localiser>(saved_->graph, config.camera, config.tracking,
-                                            config.loop, config.filter.min_depth,
-                                            config.filter.max_depth, *corrections, stats_, !live);
-  GraphAttachment graph_attachment(outputs_.publisher, loop_closer.get(), config.camera);
-  std::unique_ptr<FramesBeforePlacement> before_placement;
-  if (localising || continuing)
-    before_placement = std::make_unique<FramesBeforePlacement>(*corrections);
-  KeyframeSink* keyframe_sink =
-      localiser ? static_cast<KeyframeSink*>(localiser.get()) : loop_closer.get();
-  // The trajectories written with every checkpoint: keyframes (from the fusion side) and every
-  // frame (from the tracking side), streamed to their files rather than held.
-  const std::shared_ptr<TrajectoryStream> keyframe_file =
-      streamTo(outputs_.trajectory_path, corrections.get());
-  const std::shared_ptr<TrajectoryStream> frame_file =
-      streamTo(outputs_.frame_trajectory_path, corrections.get());
-  std::vector<CheckpointWriter::TrajectoryFile> trajectory_files;
-  for (const auto& file : {keyframe_file, frame_file})
-    if (file) trajectory_files.push_back(file);
+  // The loop thread, as the run's mode makes it (loop closure, the localiser or none): the
+  // corrections it publishes move the trajectories, and the map follows them (Mapper).
+  LoopThread loop = mode_->startLoopThread(config, stats_, !live);
+  stats_.loop_closure = loop.loop_closer != nullptr;
+  stats_.localising = !mode_->maps();
+  GraphAttachment graph_attachment(outputs_.publisher, loop.loop_closer.get(), camera);
+  const Trajectories trajectories = trajectoriesOf(outputs_, loop.corrections.get());
   FrameTracker tracker(
-      localising ? KeyframeSelector(KeyframeSelector::Policy::kNone, config.keyframe)
-                 : makeKeyframeSelector(config.keyframe, config.pose),
+      mode_->keyframeSelector(config),
       makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
-                       config.filter.max_depth, keyframe_sink),
-      stats_, frame_file.get());
+                       config.filter.max_depth, loop.keyframeSink()),
+      stats_, trajectories.frames.get());
   Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats_,
-                corrections.get(), keyframe_file.get());
+                loop.corrections.get(), trajectories.keyframes.get());
   mapper.keepMeshes(!outputs_.mesh_path.empty());
   if (!outputs_.octomap_path.empty()) mapper.keepFreeSpace(config.octomap);
-  if (continuing) mapper.continueFrom(saved_->keyframes);
+  mode_->startMap(mapper);
   spdlog::info("source: {}", source_->describe());
-  if (localising)
-    spdlog::info("poses: {}, localising in a saved map of {} keyframes ({} places): nothing mapped",
-                 tracker.poses().describe(), saved_->graph.keyframes.size(), localiser->places());
-  else if (continuing)
-    spdlog::info(
-        "poses: {}, keyframes: {}, continuing a saved map of {} keyframes: mapped in this run's "
-        "own frame until a saved place is recognised, then in the saved map's",
-        tracker.poses().describe(), effectiveKeyframePolicy(config.keyframe, config.pose),
-        saved_->graph.keyframes.size());
-  else
-    spdlog::info("poses: {}, keyframes: {}, loop closure: {}", tracker.poses().describe(),
-                 effectiveKeyframePolicy(config.keyframe, config.pose),
-                 stats_.loop_closure ? "on" : "off");
-  const std::string configuration = config.toYaml();
-  if (!outputs_.config_path.empty()) std::ofstream(outputs_.config_path) << configuration;
-  if (!stats_.loop_closure && config.checkpoint.session && !outputs_.session_path.empty())
-    spdlog::info(
-        "session: not saved (it is made of loop closure's places and graph; loop "
-        "closure is off)");
+  spdlog::info("{}", mode_->describe(tracker.poses().describe(), config, loop));
+  const std::string configuration = writeConfiguration(config, outputs_, stats_);
 
   FrameQueue queue(static_cast<std::size_t>(config.queue.capacity),
                    live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
@@ -322,19 +261,18 @@ int Pipeline::run(RunControl& control) {
   // Checkpoints: the fusion thread takes the map snapshot and hands it to the writer, which
   // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
-    fusion.request(MapRequest::kCheckpoint, [this, &writer, &trajectory_files, &config,
-                                             &loop_closer, &configuration](const Mapper& m) {
-      writer.submit(m.snapshot(), outputs_.map_path, trajectory_files,
+    fusion.request(MapRequest::kCheckpoint, [&](const Mapper& m) {
+      writer.submit(m.snapshot(), outputs_.map_path, trajectories.files,
                     meshFile(outputs_, m, stats_), gridFile(outputs_, m, config),
                     octomapFile(outputs_, m),
-                    sessionFile(outputs_, m, loop_closer.get(), config, configuration));
+                    sessionFile(outputs_, m, loop.loop_closer.get(), config, configuration));
     });
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
   // keyframes (and so the map) independent of timing.
   TrackingThread tracking(
-      {queue, tracker, fusion, publication,
-       outputs_.publisher || localising ? corrections.get() : nullptr, before_placement.get()},
+      {queue, tracker, fusion, publication, loop.shownPoses(outputs_.publisher != nullptr),
+       loop.before_placement.get()},
       !live, config.checkpoint, checkpoint, stats_, control, fail);
 
   // Wait: status until the tracking thread has taken every frame, then the rest in turn.
@@ -343,8 +281,7 @@ int Pipeline::run(RunControl& control) {
   capture.join();
   tracking.join();
   queue.freeImages();
-  if (loop_closer) loop_closer->finish();  // every keyframe searched: final corrections
-  if (localiser) localiser->finish();
+  loop.finish();
   if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());
   fusion.finish();
   stats_.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -353,33 +290,21 @@ int Pipeline::run(RunControl& control) {
   status.showFinal(stats_.wall_seconds);
 
   // Finish: the final map (at the final corrections: re-fused if the last loops moved kept
-  // keyframes), then the exit code.
+  // keyframes), then the exit code the run's mode calls for.
   mapper.settle();
-  int exit_code =
-      saveFinalMap(mapper, writer, trajectory_files, publication, outputs_, config,
-                   sessionFile(outputs_, mapper, loop_closer.get(), config, configuration), stats_);
+  int exit_code = saveFinalMap(
+      mapper, writer, trajectories.files, publication, outputs_, config,
+      sessionFile(outputs_, mapper, loop.loop_closer.get(), config, configuration), stats_);
   // No keyframe comes any more and the session is saved: the places can go.
   graph_attachment.release();
-  if (loop_closer) loop_closer->forgetPlaces();
+  if (loop.loop_closer) loop.loop_closer->forgetPlaces();
   const std::string fatal = error.get();
   if (!fatal.empty()) {
     spdlog::error("{}", fatal);
     exit_code = 1;
   }
-  if (localiser) {
-    const Localiser::Counts counts = localiser->counts();
-    stats_.frames_unplaced.store(before_placement->count(counts.first_placed));
-    return std::max(exit_code, reportLocalisation(counts, stats_));
-  }
-  if (continuing) {
-    stats_.frames_unplaced.store(before_placement->count(loop_closer->joinedAt()));
-    exit_code = std::max(exit_code, reportContinuation(*loop_closer, stats_));
-  }
-  // Nothing mapped is a failure; most frames unused is worth saying.
   const bool stopped_on_request = control.stop.load() && fatal.empty();
-  exit_code = std::max(
-      exit_code, UnmappedFrames::of(stats_, source_->skipReasons()).report(stopped_on_request));
-  return exit_code;
+  return std::max(exit_code, mode_->end(loop, stats_, source_->skipReasons(), stopped_on_request));
 }
 
 }  // namespace rgbdmap

@@ -1,7 +1,5 @@
 #include "rgbdmap/runtime/run_thread.hpp"
 
-#include "rgbdmap/runtime/pipeline.hpp"
-
 namespace rgbdmap {
 
 RunThread::~RunThread() {

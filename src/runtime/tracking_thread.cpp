@@ -4,7 +4,7 @@
 #include <exception>
 
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/pipeline.hpp"
+#include "rgbdmap/runtime/run_mode.hpp"
 
 namespace rgbdmap {
 namespace {

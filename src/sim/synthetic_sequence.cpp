@@ -385,6 +385,42 @@ void measure(const cv::Mat& depth, const cv::Mat& incidence_cos, int frame,
   });
 }
 
+// A frame's colour and depth images, encoded side by side (PNG encoding is most of a frame's
+// cost). An exception must not leave a worker thread, so each job reports its error as text.
+void writeImages(const std::string& rgb_path, const cv::Mat& color, const std::string& depth_path,
+                 const cv::Mat& depth16, int compression) {
+  std::string write_errors[2];
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& jobs) {
+    for (int job = jobs.start; job < jobs.end; ++job) {
+      try {
+        if (job == 0)
+          writeImage(rgb_path, color, compression);
+        else
+          writeImage(depth_path, depth16, compression);
+      } catch (const std::exception& e) {
+        write_errors[job] = e.what();
+      }
+    }
+  });
+  for (const std::string& error : write_errors)
+    if (!error.empty()) throw InputError(error);
+}
+
+// visible_surface.pcd: the surface the frames saw, sampled (what `rgbdmap evaluate` scores
+// against).
+const pcl::PointCloud<pcl::PointXYZRGB>& writeSurface(const std::string& folder,
+                                                      SurfaceSampler& surface) {
+  const std::string surface_path = folder + "/visible_surface.pcd";
+  pcl::PointCloud<pcl::PointXYZRGB>& cloud = surface.cloud();
+  cloud.width = static_cast<std::uint32_t>(cloud.size());
+  cloud.height = 1;
+  cloud.is_dense = true;
+  if (cloud.empty() || pcl::io::savePCDFileBinary(surface_path, cloud) != 0)
+    throw InputError(surface_path + ": cannot write the visible surface" +
+                     (cloud.empty() ? std::string(" (the camera saw no surface in range)") : ""));
+  return cloud;
+}
+
 }  // namespace
 
 SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
@@ -451,23 +487,8 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
 
     const std::string rgb_name = "rgb/" + stampName(rgb_stamp) + ".png";
     const std::string depth_name = "depth/" + stampName(depth_stamp) + ".png";
-    // Colour and depth are encoded side by side; PNG encoding is most of a frame's cost.
-    // An exception must not leave a worker thread, so each job reports its error as text.
-    std::string write_errors[2];
-    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& jobs) {
-      for (int job = jobs.start; job < jobs.end; ++job) {
-        try {
-          if (job == 0)
-            writeImage(folder + "/" + rgb_name, color, options.png_compression);
-          else
-            writeImage(folder + "/" + depth_name, depth16, options.png_compression);
-        } catch (const std::exception& e) {
-          write_errors[job] = e.what();
-        }
-      }
-    });
-    for (const std::string& error : write_errors)
-      if (!error.empty()) throw InputError(error);
+    writeImages(folder + "/" + rgb_name, color, folder + "/" + depth_name, depth16,
+                options.png_compression);
     rgb_list << stampName(rgb_stamp) << ' ' << rgb_name << '\n';
     depth_list << stampName(depth_stamp) << ' ' << depth_name << '\n';
   }
@@ -481,14 +502,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   } catch (const std::runtime_error& e) {
     throw InputError(e.what());
   }
-  const std::string surface_path = folder + "/visible_surface.pcd";
-  pcl::PointCloud<pcl::PointXYZRGB>& cloud = surface.cloud();
-  cloud.width = static_cast<std::uint32_t>(cloud.size());
-  cloud.height = 1;
-  cloud.is_dense = true;
-  if (cloud.empty() || pcl::io::savePCDFileBinary(surface_path, cloud) != 0)
-    throw InputError(surface_path + ": cannot write the visible surface" +
-                     (cloud.empty() ? std::string(" (the camera saw no surface in range)") : ""));
+  const pcl::PointCloud<pcl::PointXYZRGB>& cloud = writeSurface(folder, surface);
 
   SyntheticSequenceSummary summary;
   summary.frames = frames;

@@ -78,6 +78,75 @@ PixelSample bilinear(const PyramidLevel& level, float u, float v, bool& depth_ok
   return (1 - ay) * ((1 - ax) * s00 + ax * s01) + ay * ((1 - ax) * s10 + ax * s11);
 }
 
+// The residuals of the reference's `points` (x, y, z, intensity) moved by (R, t) into `level`,
+// each with its Jacobian rows; every 4th point's absolute residuals go to abs_i and abs_z (for
+// the robust scales).
+void residualsAt(const AlignmentReference::Points& points, const PyramidLevel& level,
+                 const Eigen::Matrix3f& R, const Eigen::Vector3f& t,
+                 std::vector<Residual>& residuals, std::vector<float>& abs_i,
+                 std::vector<float>& abs_z) {
+  const LevelCamera& c = level.camera;
+  const float umax = static_cast<float>(c.width - 2), vmax = static_cast<float>(c.height - 2);
+  for (std::size_t n = 0; n < points.size(); ++n) {
+    const Eigen::Vector4f& q = points[n];
+    const Eigen::Vector3f p = R * q.head<3>() + t;
+    if (p.z() <= 0.05f) continue;
+    const float iz = 1.0f / p.z();
+    const float u = c.fx * p.x() * iz + c.cx, v = c.fy * p.y() * iz + c.cy;
+    if (!(u >= 1.0f && v >= 1.0f && u < umax && v < vmax)) continue;
+    bool depth_ok = false;
+    const PixelSample s = bilinear(level, u, v, depth_ok);
+    // d(u,v)/dp rows: (fx/z, 0, -fx x/z^2), (0, fy/z, -fy y/z^2).
+    const float dux = c.fx * iz, dvy = c.fy * iz;
+    const float duz = -c.fx * p.x() * iz * iz, dvz = -c.fy * p.y() * iz * iz;
+    Residual r;
+    r.ji = jacobianRow(p, s[1] * dux, s[2] * dvy, s[1] * duz + s[2] * dvz);
+    r.ri = s[0] - q[3];
+    if (depth_ok) {
+      r.jz = jacobianRow(p, s[4] * dux, s[5] * dvy, s[4] * duz + s[5] * dvz - 1.0f);
+      r.rz = s[3] - p.z();
+      if ((n & 3) == 0) abs_z.push_back(std::abs(r.rz));
+    } else {
+      r.rz = std::numeric_limits<float>::quiet_NaN();
+    }
+    if ((n & 3) == 0) abs_i.push_back(std::abs(r.ri));
+    residuals.push_back(r);
+  }
+}
+
+// The Gauss-Newton normal equations H dx = -b of the residuals, Huber-weighted with the robust
+// scales 1/inv_i and 1/inv_z (depth residuals weighed `depth_weight` against intensity ones).
+void normalEquations(const std::vector<Residual>& residuals, float inv_i, float inv_z, float k,
+                     float depth_weight, Matrix6d& H, Vector6d& b) {
+  Eigen::Matrix<float, 6, 6> Hf = Eigen::Matrix<float, 6, 6>::Zero();
+  Vector6f bf = Vector6f::Zero();
+  H.setZero();
+  b.setZero();
+  std::size_t batch = 0;
+  for (const Residual& r : residuals) {
+    const float ni = r.ri * inv_i;
+    const float wi = huberWeight(ni, k) * inv_i * inv_i;
+    Hf.noalias() += (wi * r.ji) * r.ji.transpose();
+    bf.noalias() += (wi * r.ri) * r.ji;
+    if (r.rz == r.rz) {
+      const float nz = r.rz * inv_z;
+      const float wz = depth_weight * huberWeight(nz, k) * inv_z * inv_z;
+      Hf.noalias() += (wz * r.jz) * r.jz.transpose();
+      bf.noalias() += (wz * r.rz) * r.jz;
+    }
+    // Flush to double now and then: float sums of tens of thousands of terms lose digits.
+    if (++batch == 512) {
+      H += Hf.cast<double>();
+      b += bf.cast<double>();
+      Hf.setZero();
+      bf.setZero();
+      batch = 0;
+    }
+  }
+  H += Hf.cast<double>();
+  b += bf.cast<double>();
+}
+
 }  // namespace
 
 void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coarsest,
@@ -128,7 +197,6 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   for (int l = coarsest; l >= finest; --l) {
     const auto& points = reference.levels[static_cast<std::size_t>(l)].points;
     const PyramidLevel& level = current.level(l);
-    const LevelCamera& c = level.camera;
     const int iterations = l == finest ? options_.finest_iterations : options_.max_iterations;
     residuals.reserve(points.size());
     std::size_t landed = 0;
@@ -139,64 +207,13 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       residuals.clear();
       abs_i.clear();
       abs_z.clear();
-      const float umax = static_cast<float>(c.width - 2), vmax = static_cast<float>(c.height - 2);
-      for (std::size_t n = 0; n < points.size(); ++n) {
-        const Eigen::Vector4f& q = points[n];
-        const Eigen::Vector3f p = R * q.head<3>() + t;
-        if (p.z() <= 0.05f) continue;
-        const float iz = 1.0f / p.z();
-        const float u = c.fx * p.x() * iz + c.cx, v = c.fy * p.y() * iz + c.cy;
-        if (!(u >= 1.0f && v >= 1.0f && u < umax && v < vmax)) continue;
-        bool depth_ok = false;
-        const PixelSample s = bilinear(level, u, v, depth_ok);
-        // d(u,v)/dp rows: (fx/z, 0, -fx x/z^2), (0, fy/z, -fy y/z^2).
-        const float dux = c.fx * iz, dvy = c.fy * iz;
-        const float duz = -c.fx * p.x() * iz * iz, dvz = -c.fy * p.y() * iz * iz;
-        Residual r;
-        r.ji = jacobianRow(p, s[1] * dux, s[2] * dvy, s[1] * duz + s[2] * dvz);
-        r.ri = s[0] - q[3];
-        if (depth_ok) {
-          r.jz = jacobianRow(p, s[4] * dux, s[5] * dvy, s[4] * duz + s[5] * dvz - 1.0f);
-          r.rz = s[3] - p.z();
-          if ((n & 3) == 0) abs_z.push_back(std::abs(r.rz));
-        } else {
-          r.rz = std::numeric_limits<float>::quiet_NaN();
-        }
-        if ((n & 3) == 0) abs_i.push_back(std::abs(r.ri));
-        residuals.push_back(r);
-      }
+      residualsAt(points, level, R, t, residuals, abs_i, abs_z);
       landed = residuals.size();
       if (landed < 12) break;
       sigma_i = robustSigma(abs_i, sigma_i);
       sigma_z = robustSigma(abs_z, sigma_z);
-      const float inv_i = 1.0f / sigma_i, inv_z = 1.0f / sigma_z;
-      Eigen::Matrix<float, 6, 6> Hf = Eigen::Matrix<float, 6, 6>::Zero();
-      Vector6f bf = Vector6f::Zero();
-      H.setZero();
-      Vector6d b = Vector6d::Zero();
-      std::size_t batch = 0;
-      for (const Residual& r : residuals) {
-        const float ni = r.ri * inv_i;
-        const float wi = huberWeight(ni, k) * inv_i * inv_i;
-        Hf.noalias() += (wi * r.ji) * r.ji.transpose();
-        bf.noalias() += (wi * r.ri) * r.ji;
-        if (r.rz == r.rz) {
-          const float nz = r.rz * inv_z;
-          const float wz = depth_weight * huberWeight(nz, k) * inv_z * inv_z;
-          Hf.noalias() += (wz * r.jz) * r.jz.transpose();
-          bf.noalias() += (wz * r.rz) * r.jz;
-        }
-        // Flush to double now and then: float sums of tens of thousands of terms lose digits.
-        if (++batch == 512) {
-          H += Hf.cast<double>();
-          b += bf.cast<double>();
-          Hf.setZero();
-          bf.setZero();
-          batch = 0;
-        }
-      }
-      H += Hf.cast<double>();
-      b += bf.cast<double>();
+      Vector6d b;
+      normalEquations(residuals, 1.0f / sigma_i, 1.0f / sigma_z, k, depth_weight, H, b);
       const Vector6d step = H.ldlt().solve(-b);
       if (!step.allFinite()) break;
       motion = expSE3(step) * motion;

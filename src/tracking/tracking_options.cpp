@@ -10,8 +10,6 @@ Keys trackingKeys(TrackingOptions& o) {
               "dense: coarsest pyramid level aligned (each level halves the image)"),
       integer("tracking.finest_level", &o.finest_level, 0, 6,
               "dense: finest pyramid level aligned (0 = full resolution, 1 = 320x240)"),
-      boolean("tracking.undistort", &o.undistort,
-              "dense: undo lens distortion in the tracking pyramid (depth and 3-D points agree)"),
       integer("tracking.max_iterations", &o.max_iterations, 1, 100,
               "dense: Gauss-Newton steps per coarse level"),
       integer("tracking.finest_iterations", &o.finest_iterations, 1, 100,

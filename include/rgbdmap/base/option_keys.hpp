@@ -15,6 +15,9 @@ struct Key {
   std::string help;
   std::function<void(const std::string&)> set;  // throws std::invalid_argument with why
   std::function<std::string()> get;
+  // A former name of key `replaced_by`: still read (a configuration saved before the rename
+  // loads, with a deprecation warning), never listed or written.
+  std::string replaced_by;
 };
 using Keys = std::vector<Key>;
 
@@ -31,15 +34,20 @@ Key text(const std::string& name, std::string* field, const std::string& help);
 // limits that join two keys, such as a range's ends.
 Key checked(Key key, std::function<void()> check);
 
+// `now` under a former name `old_name` (see Key::replaced_by).
+Key formerName(const std::string& old_name, const Key& now);
+
 // Appends `more` to `keys`.
 void append(Keys& keys, Keys more);
 
 // Sets one key from text; throws InputError naming the key (and `origin`) when the key is unknown
-// or the value is invalid or out of range.
+// or the value is invalid or out of range. A former name sets its key and warns, naming `origin`
+// and the key's name now.
 void setKey(Keys& keys, const std::string& key, const std::string& value,
             const std::string& origin);
 // Applies a YAML file (nested maps, e.g. `map: {voxel_size: 0.01}`); a top-level `preset` entry
-// goes to `preset`. Throws InputError naming the file and line.
+// goes to `preset`. Throws InputError naming the file and line. Former names (a configuration
+// saved by an older version) are read, with one warning line for the file naming the keys now.
 void loadYamlKeys(Keys& keys, const std::string& path, std::string& preset);
 // The YAML file of a preset name ("tum_fr1", in the config folder) or the path itself when it
 // names a file; throws InputError for an unknown name.

@@ -11,9 +11,11 @@ namespace rgbdmap {
 // outlier tests, the smoothing window, PCL's statistical filter and lens undistortion (see
 // KeyframeIntegrator). The depth range also bounds tracking and loop closure.
 struct FilterOptions {
-  double min_depth = 0.3;         // m
-  double max_depth = 4.0;         // m
-  bool undistort = true;          // undo lens distortion when the camera has it
+  double min_depth = 0.3;  // m
+  double max_depth = 4.0;  // m
+  // Undo lens distortion when the camera has it (key camera.undistort, which sets
+  // TrackingOptions::undistort too: one lens).
+  bool undistort = true;
   std::string outliers = "fast";  // fast | statistical | none
   double edge_jump = 0.03;        // relative depth jump that marks a flying pixel
   int speck_min_neighbours = 4;   // of 8, with similar depth

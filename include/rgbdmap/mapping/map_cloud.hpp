@@ -20,20 +20,26 @@ struct PackedMapPoint {
 static_assert(sizeof(PackedMapPoint) == 16, "a packed point is 16 bytes");
 using PackedMapCloud = std::vector<PackedMapPoint>;
 
+// A map point of either kind (MapCloud's pcl::PointXYZRGB or PackedMapPoint) at `position` with
+// colour r, g, b: the one place their fields are written, from a voxel or from another point.
+template <typename Point>
+Point mapPoint(float x, float y, float z, std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+  Point point;
+  point.x = x;
+  point.y = y;
+  point.z = z;
+  point.r = r;
+  point.g = g;
+  point.b = b;
+  return point;
+}
+
 // The packed points as a MapCloud (what writers and viewers take).
 inline MapCloud toMapCloud(const PackedMapCloud& packed) {
   MapCloud cloud;
-  cloud.resize(packed.size());
-  for (std::size_t i = 0; i < packed.size(); ++i) {
-    const PackedMapPoint& p = packed[i];
-    pcl::PointXYZRGB& out = cloud[i];
-    out.x = p.x;
-    out.y = p.y;
-    out.z = p.z;
-    out.r = p.r;
-    out.g = p.g;
-    out.b = p.b;
-  }
+  cloud.reserve(packed.size());
+  for (const PackedMapPoint& p : packed)
+    cloud.push_back(mapPoint<pcl::PointXYZRGB>(p.x, p.y, p.z, p.r, p.g, p.b));
   cloud.width = static_cast<std::uint32_t>(cloud.size());
   cloud.height = 1;
   cloud.is_dense = true;

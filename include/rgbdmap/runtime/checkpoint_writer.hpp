@@ -9,27 +9,15 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/base/file_io.hpp"
+#include "rgbdmap/map_files/trajectory_stream.hpp"
 #include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/occupancy_grid.hpp"
 #include "rgbdmap/mapping/triangle_mesh.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
-#include "rgbdmap/runtime/trajectory_stream.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 
 namespace rgbdmap {
-
-// Writes a cloud as binary PCD so that the destination only ever holds a complete file:
-// write "<path>.tmp-<pid>", fsync it, rename over the destination, fsync the folder.
-// Returns false with `error` naming the path and the system error (EFBIG, ENOSPC, EDQUOT,
-// EROFS, ...) when anything fails; the temp file is removed and the destination left as it was.
-bool writePcdAtomically(const MapCloud& cloud, const std::string& path, std::string& error);
-// The same for any format: `write` writes the whole file to `fd` (false with errno set).
-bool writeFileAtomically(const std::string& path, const std::function<bool(int fd)>& write,
-                         std::string& error);
-// The same for bytes held in memory (a text, an encoded image).
-bool writeBytesAtomically(const std::string& path, const std::string& bytes, std::string& error);
 
 // A background thread that writes map snapshots while mapping goes on. Only the newest pending
 // snapshot is kept: if mapping produces snapshots faster than the disk takes them, older

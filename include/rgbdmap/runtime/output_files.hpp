@@ -1,25 +1,36 @@
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
-#include "rgbdmap/runtime/pipeline.hpp"
-
 namespace rgbdmap {
+
+class MapPublisher;
 
 // The files a mapping run writes and the temporary files their writers keep while writing, named
 // by one rule for the writers, for the front doors and for the second Ctrl-C that removes them.
+// (A writer's temporary file: temporaryFileOf, atomic_write.hpp; a trajectory's spool:
+// spoolFileOf, trajectory_stream.hpp.)
+
+// Where a run's outputs go.
+struct PipelineOutputs {
+  std::string map_path = "map.pcd";
+  std::string trajectory_path;        // keyframe poses, TUM format ("" = none)
+  std::string frame_trajectory_path;  // the pose of every frame, TUM format ("" = none)
+  std::string config_path;            // effective configuration ("" = none)
+  std::string mesh_path;     // triangle mesh (binary PLY) written with every map save ("" = none)
+  std::string grid_path;     // occupancy grid (PGM + YAML) written with every map save ("" = none)
+  std::string octomap_path;  // binary OctoMap written with every map save ("" = none)
+  std::string session_path;  // MAP.session/ written with every map save ("" = none)
+  bool status_line = true;
+  MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
+};
 
 // The path without its file name's extension: "out/map.pcd" -> "out/map". What follows the file
 // name's last dot is the extension, also when that dot is the name's first character
 // ("out/.pcd" -> "out/"); a name without a dot is kept whole ("out.d/map" -> "out.d/map").
 std::string stem(const std::string& path);
-
-// "<path>.tmp-<pid>": where writeFileAtomically writes `path` before renaming it into place.
-std::string temporaryFileOf(const std::string& path);
-// "<path>.anchored": the spool beside a trajectory file when loop closure can still move its
-// poses (TrajectoryStream).
-std::string spoolFileOf(const std::string& trajectory_path);
 
 // The files of a run whose map is `map_path`: the map, and beside it MAP_keyframes.txt,
 // MAP_trajectory.txt, MAP.yaml and MAP.session (docs/usage.md), with `mesh_path` ("" = no mesh).

@@ -1,55 +1,33 @@
 #pragma once
 
-#include <atomic>
 #include <memory>
 #include <string>
 
 #include "rgbdmap/base/run_stats.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
+#include "rgbdmap/runtime/output_files.hpp"
+#include "rgbdmap/runtime/run_thread.hpp"
 
 namespace rgbdmap {
 
-struct Session;
-
-// Requests from outside the pipeline (signal thread, tests). Only atomics: safe from anywhere.
-struct RunControl {
-  std::atomic<bool> stop{false};      // SIGINT/SIGTERM: stop capture, drain, final save
-  std::atomic<bool> snapshot{false};  // SIGUSR1: write a checkpoint now
-};
-
-struct PipelineOutputs {
-  std::string map_path = "map.pcd";
-  std::string trajectory_path;        // keyframe poses, TUM format ("" = none)
-  std::string frame_trajectory_path;  // the pose of every frame, TUM format ("" = none)
-  std::string config_path;            // effective configuration ("" = none)
-  std::string mesh_path;     // triangle mesh (binary PLY) written with every map save ("" = none)
-  std::string grid_path;     // occupancy grid (PGM + YAML) written with every map save ("" = none)
-  std::string octomap_path;  // binary OctoMap written with every map save ("" = none)
-  std::string session_path;  // MAP.session/ written with every map save ("" = none)
-  bool status_line = true;
-  MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
-};
+class RunMode;
 
 // The running system: a capture thread reads the source into a bounded queue, a tracking thread
 // gives every frame its pose, picks keyframes and triggers checkpoints, a fusion thread fuses the
-// keyframes into the map and takes its snapshots, a writer thread writes them. run() returns
-// after the source ends or a stop is requested, with the final map written.
+// keyframes into the map and takes its snapshots, a writer thread writes them; the loop thread
+// (loop closure or the localiser) is the run's mode's. run() returns after the source ends or a
+// stop is requested, with the final map written.
 class Pipeline {
  public:
-  // `saved`: a saved session the run starts from, used as `use` says:
-  // - kLocalise (--localise): every frame is posed in the saved map's frame (trajectories,
-  //   viewer, ROS), nothing is fused and no map is written (leave outputs.map_path empty);
-  // - kContinue (--continue): the run maps in its own frame until it recognises the saved map,
-  //   then in the saved map's, and writes one map and one session of both (LoopCloser, Mapper).
-  // Either way frames posed before the saved map is recognised are counted.
-  enum class SessionUse { kLocalise, kContinue };
+  // `mode`: mapping from nothing, continuing a saved session or localising in one (run_mode.hpp);
+  // `outputs` as the mode names them (RunMode::outputs).
   Pipeline(Config config, std::unique_ptr<FrameSource> source, PipelineOutputs outputs,
-           std::shared_ptr<const Session> saved = nullptr, SessionUse use = SessionUse::kLocalise);
+           std::shared_ptr<const RunMode> mode);
 
   // Returns the process exit code: 0 on success, 1 when the run stopped on bad input or a failed
-  // final write (the map built so far is still saved).
+  // final write (the map built so far is still saved) or its mode's end calls for it.
   int run(RunControl& control);
   const RunStats& stats() const { return stats_; }
 
@@ -57,8 +35,7 @@ class Pipeline {
   Config config_;
   std::unique_ptr<FrameSource> source_;
   PipelineOutputs outputs_;
-  std::shared_ptr<const Session> saved_;
-  SessionUse use_;
+  std::shared_ptr<const RunMode> mode_;
   RunStats stats_;
 };
 

@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/runtime/pipeline.hpp"
+#include "rgbdmap/runtime/run_thread.hpp"
 
 namespace rgbdmap {
 

@@ -1,11 +1,17 @@
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <thread>
 
 namespace rgbdmap {
 
-struct RunControl;
+// Requests from outside the run (the signal thread, a service, tests). Only atomics: safe from
+// anywhere.
+struct RunControl {
+  std::atomic<bool> stop{false};      // SIGINT/SIGTERM: stop capture, drain, final save
+  std::atomic<bool> snapshot{false};  // SIGUSR1: write a checkpoint now
+};
 
 // A thread of the run, joined when it goes out of scope. One still running then (the run was
 // left by an exception) is told to stop first (RunControl::stop) rather than waited for until

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "rgbdmap/capture/frame_source.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 namespace rgbdmap {
 

@@ -6,18 +6,17 @@
 #include <string>
 
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/config/run_options.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/frame_tracker.hpp"
-#include "rgbdmap/runtime/frames_before_placement.hpp"
 #include "rgbdmap/runtime/fusion_thread.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
-#include "rgbdmap/runtime/run_options.hpp"
 #include "rgbdmap/runtime/run_thread.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {
 
-struct RunControl;
+class FramesBeforePlacement;  // run_mode.hpp
 
 // Takes every frame from the queue on its own thread: gives it its pose (FrameTracker), hands
 // keyframes to the fusion thread, shows the viewer the frame and, when due, the map, and asks
@@ -34,8 +33,8 @@ class TrackingThread {
     MapPublication& publication;
     // Moves the poses the viewer is shown by the loop closures (null: shown as tracked).
     const PoseCorrections* viewer_corrections;
-    // Localising: every posed frame's anchor, to count those before the saved map was
-    // recognised (null: not localising).
+    // Localising or continuing: every posed frame's anchor, to count those before the saved map
+    // was recognised (null: neither).
     FramesBeforePlacement* before_placement = nullptr;
   };
 

@@ -11,9 +11,10 @@ namespace rgbdmap {
 // The pixels of a keyframe that take part in alignment, per pyramid level: each one's 3-D
 // point in the keyframe's camera and its intensity.
 struct AlignmentReference {
+  using Points = std::vector<Eigen::Vector4f, Eigen::aligned_allocator<Eigen::Vector4f>>;
   struct Level {
     LevelCamera camera;
-    std::vector<Eigen::Vector4f, Eigen::aligned_allocator<Eigen::Vector4f>> points;  // x y z I
+    Points points;  // x y z I
   };
   std::vector<Level> levels;
   int valid_pixels = 0;  // at the finest level, before subsampling: the overlap denominator

@@ -17,8 +17,10 @@ struct TrackingOptions {
   // coarsest_level down to finest_level.
   int coarsest_level = 3;
   int finest_level = 2;
-  bool undistort = true;    // resample the finest level to a pinhole camera when the lens distorts
-  int max_iterations = 12;  // Gauss-Newton steps per level (coarse levels)
+  // Resample the finest level to a pinhole camera when the lens distorts (key camera.undistort,
+  // which sets FilterOptions::undistort too: one lens).
+  bool undistort = true;
+  int max_iterations = 12;    // Gauss-Newton steps per level (coarse levels)
   int finest_iterations = 6;  // on the finest level, where a step costs the most
   double depth_weight = 0.0;  // weight of a (normalised) depth residual vs an intensity one
   double huber_k = 1.345;     // Huber threshold, in robust standard deviations

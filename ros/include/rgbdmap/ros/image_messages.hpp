@@ -7,7 +7,7 @@
 #include <string>
 
 #include "rgbdmap/base/frame.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 namespace rgbdmap {
 

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 namespace rgbdmap {
 
@@ -23,6 +23,7 @@ struct NodeSettings {
   double session_rate = 500e3;
   std::string grid;     // ~grid: the grid's PGM (and YAML) written with every save ("" = none)
   std::string octomap;  // ~octomap: the OctoMap written with every save and ~save_octomap
+  bool octomap_given = false;  // ~octomap set (else OUT.bt beside ~out, when mapping)
   // ~localise: a saved session (MAP.session) to localise in instead of mapping: poses and TF in
   // its map's frame, nothing mapped ("" = map).
   std::string localise;

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "rgbdmap/base/option_keys.hpp"
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 namespace rgbdmap {
 

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 
 namespace rgbdmap {
 

@@ -12,8 +12,8 @@
 #include <string>
 
 #include "rgbdmap/capture/frame_source.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/ros/stamp_pairer.hpp"
-#include "rgbdmap/runtime/config.hpp"
 
 namespace rgbdmap {
 

@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/session_records.hpp"
+#include "rgbdmap/sessions/session_records.hpp"
 
 namespace rgbdmap {
 namespace {

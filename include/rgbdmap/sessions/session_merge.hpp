@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "rgbdmap/runtime/config.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/config/config.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 
 namespace rgbdmap {
 

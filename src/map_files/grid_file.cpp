@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/grid_file.hpp"
+#include "rgbdmap/map_files/grid_file.hpp"
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/map_files/atomic_write.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 
 #include <fcntl.h>
 #include <spdlog/spdlog.h>
@@ -13,9 +13,8 @@
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
-#include "rgbdmap/runtime/output_files.hpp"
-#include "rgbdmap/runtime/session_records.hpp"
+#include "rgbdmap/map_files/atomic_write.hpp"
+#include "rgbdmap/sessions/session_records.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -345,30 +344,6 @@ Session readSession(const std::string& path) {
   readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
   if (fs::exists(in(kStreamsFile), ec))
     readStreams(openRecord(in(kStreamsFile), kStreamsKind, Session::kFormatVersion), session);
-  return session;
-}
-
-std::shared_ptr<const Session> openSessionToStartFrom(const std::string& path,
-                                                      const std::string& map_path,
-                                                      const std::string& option, bool localise) {
-  std::string saved = path;
-  while (saved.size() > 1 && saved.back() == '/') saved.pop_back();
-  std::error_code ec;
-  if (fs::weakly_canonical(sessionPathOf(map_path), ec) == fs::weakly_canonical(saved, ec))
-    throw InputError(option + " " + path + ": the run's files (" + map_path +
-                     ") would be written beside the saved map's; give it its own name (e.g. " +
-                     (localise ? "localised.pcd: its trajectory is localised_trajectory.txt)"
-                               : "continued.pcd: the saved map stays as it was)"));
-  Session read = readSession(path);
-  if (localise) read.keyframes = {};
-  auto session = std::make_shared<const Session>(std::move(read));
-  std::size_t places = 0;
-  for (const auto& place : session->graph.places) places += place ? 1 : 0;
-  spdlog::info("{} {}: {} keyframes, {} places{} (made by {})",
-               localise ? "localising in" : "continuing", path, session->graph.keyframes.size(),
-               places,
-               localise ? "" : fmt::format(", {} kept keyframes", session->keyframes.size()),
-               session->created_by);
   return session;
 }
 

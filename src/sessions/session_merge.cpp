@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/session_merge.hpp"
+#include "rgbdmap/sessions/session_merge.hpp"
 
 #include <spdlog/spdlog.h>
 

@@ -10,6 +10,10 @@
 
 namespace rgbdmap {
 
+// "<path>.anchored": the spool beside a trajectory file when loop closure can still move its
+// poses (a second Ctrl-C removes it, see output_files.hpp).
+std::string spoolFileOf(const std::string& trajectory_path);
+
 // A trajectory file (TUM format) kept on disk rather than in memory, so that a run of hours holds
 // only the poses recorded since the last checkpoint. Poses are recorded from one thread (tracking
 // or fusion) and written by another (the checkpoint writer) with persist():

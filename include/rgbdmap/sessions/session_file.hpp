@@ -54,14 +54,6 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
 Session readSession(const std::string& path);
 SessionSummary summarise(const Session& session, const std::string& path);
 
-// The session a run starts from (--localise or --continue, ~localise: `option`), read whole,
-// after checking that the run's own files, named after `map_path`, would not land beside the
-// saved map's (which stays as it was). Localising keeps only the graph and the places (the kept
-// keyframes' images are for fusion). Throws InputError naming the option and the path.
-std::shared_ptr<const Session> openSessionToStartFrom(const std::string& path,
-                                                      const std::string& map_path,
-                                                      const std::string& option, bool localise);
-
 // The corrections the session's graph makes to its keyframes' odometry (PoseCorrections'
 // table: optimised pose times the inverse of the odometry pose, by keyframe id).
 PoseCorrections::Table correctionsOf(const Session& session);

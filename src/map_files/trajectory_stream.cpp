@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/trajectory_stream.hpp"
+#include "rgbdmap/map_files/trajectory_stream.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -9,9 +9,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "rgbdmap/base/file_io.hpp"
 #include "rgbdmap/base/tum_pose_line.hpp"
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
-#include "rgbdmap/runtime/output_files.hpp"
+#include "rgbdmap/map_files/atomic_write.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -29,6 +29,10 @@ std::string failure(const std::string& file, const char* what) {
 }
 
 }  // namespace
+
+std::string spoolFileOf(const std::string& trajectory_path) {
+  return trajectory_path + ".anchored";
+}
 
 TrajectoryStream::TrajectoryStream(std::string path, const PoseCorrections* corrections)
     : path_(std::move(path)), spool_(spoolFileOf(path_)), corrections_(corrections) {}

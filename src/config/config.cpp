@@ -1,9 +1,21 @@
-#include "rgbdmap/runtime/config.hpp"
+#include "rgbdmap/config/config.hpp"
 
 namespace rgbdmap {
 
 Keys Config::keys() {
   Keys keys = cameraKeys(camera);
+  // One key for the lens, read by tracking (its pyramid, relocalisation, places) and by fusion:
+  // each layer keeps its own flag, both set by it. Its former names (two keys) are still read.
+  Key lens = boolean("camera.undistort", &tracking.undistort,
+                     "undo the lens distortion (camera.k1-k3, p1, p2) in tracking, relocalisation "
+                     "and fusion");
+  lens.set = [set = lens.set, this](const std::string& value) {
+    set(value);
+    filter.undistort = tracking.undistort;
+  };
+  keys.push_back(lens);
+  keys.push_back(formerName("tracking.undistort", lens));
+  keys.push_back(formerName("filter.undistort", lens));
   append(keys, replayKeys(replay));
   append(keys, queueKeys(queue));
   append(keys, poseKeys(pose));

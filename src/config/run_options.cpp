@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/run_options.hpp"
+#include "rgbdmap/config/run_options.hpp"
 
 namespace rgbdmap {
 

@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,8 @@
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
-#include "rgbdmap/runtime/map_piece.hpp"
-#include "rgbdmap/runtime/session_records.hpp"
+#include "rgbdmap/sessions/map_piece.hpp"
+#include "rgbdmap/sessions/session_records.hpp"
 
 namespace rgbdmap {
 namespace {

@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/map_piece.hpp"
+#include "rgbdmap/sessions/map_piece.hpp"
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>

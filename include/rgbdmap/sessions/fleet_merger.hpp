@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/config/config.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
-#include "rgbdmap/runtime/config.hpp"
-#include "rgbdmap/runtime/session_merge.hpp"
-#include "rgbdmap/runtime/session_stream.hpp"
+#include "rgbdmap/sessions/session_merge.hpp"
+#include "rgbdmap/sessions/session_stream.hpp"
 #include "rgbdmap/tracking/pose_corrections.hpp"
 
 namespace rgbdmap {

@@ -1,11 +1,11 @@
-#include "rgbdmap/runtime/octomap_file.hpp"
+#include "rgbdmap/map_files/octomap_file.hpp"
 
 #include <octomap/OcTree.h>
 
 #include <sstream>
 #include <unordered_set>
 
-#include "rgbdmap/runtime/checkpoint_writer.hpp"
+#include "rgbdmap/map_files/atomic_write.hpp"
 
 namespace rgbdmap {
 

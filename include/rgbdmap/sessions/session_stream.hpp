@@ -9,7 +9,7 @@
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/mapping/keyframe_store.hpp"
-#include "rgbdmap/runtime/session_file.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
 
 namespace rgbdmap {

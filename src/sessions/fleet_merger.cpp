@@ -1,4 +1,4 @@
-#include "rgbdmap/runtime/fleet_merger.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -6,7 +6,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/steady_time.hpp"
-#include "rgbdmap/runtime/map_piece.hpp"
+#include "rgbdmap/sessions/map_piece.hpp"
 
 namespace rgbdmap {
 
