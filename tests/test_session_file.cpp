@@ -249,7 +249,7 @@ TEST(SessionFile, ItsConfigurationWithTheFormerUndistortKeysStillLoads) {
   ASSERT_EQ(
       test::run(test::binary() + " session " + copy + " --map " + dir + "/again.pcd", &output), 0)
       << output;
-  EXPECT_EQ(test::countOccurrences(output, "undistort"), 1u) << output;
+  EXPECT_EQ(test::countOccurrences(output, "former names, still read"), 1u) << output;
   EXPECT_NE(
       output.find(config + ": tracking.undistort and filter.undistort are now camera.undistort"),
       std::string::npos)
