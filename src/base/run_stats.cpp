@@ -81,6 +81,8 @@ std::string RunStats::toJson() const {
       << "  \"mesh_triangles\": " << mesh_triangles << ",\n"
       << "  \"map_memory_mb\": " << map_memory_mb << ",\n"
       << "  \"kept_keyframes_mb\": " << kept_keyframes_mb << ",\n"
+      << "  \"kept_keyframes_on_disk\": " << kept_keyframes_on_disk << ",\n"
+      << "  \"kept_keyframes_disk_mb\": " << kept_keyframes_disk_mb << ",\n"
       << "  \"place_database_mb\": " << place_database_mb << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);

@@ -1,5 +1,7 @@
 #include "rgbdmap/mapping/keyframe_store.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -27,16 +29,16 @@ void KeyframeStore::findNearest(std::size_t i) {
                                      viewpointDistance(entries_[i].fused_at, entries_[j].fused_at));
 }
 
-// Among the keyframes with another kept one within kUniqueViewpoint (a viewpoint seen once is
-// kept whatever it costs), the one whose neighbours in time are nearest each other: what is kept
-// stays spread evenly over the run. (Letting go of the older of the two nearest viewpoints
-// instead kept 0.94 of the synthetic walk's surface with a 64 MB budget, this 0.98.)
+// Among the keyframes in memory with another kept one within kUniqueViewpoint (a viewpoint seen
+// once is not let go), the one whose neighbours in time are nearest each other: what is kept stays
+// spread evenly over the run. (Letting go of the older of the two nearest viewpoints instead kept
+// 0.94 of the synthetic walk's surface with a 64 MB budget, this 0.98.) None: size().
 std::size_t KeyframeStore::mostRedundant() const {
   std::size_t best = entries_.size();
   double best_gap = std::numeric_limits<double>::infinity();
   // The first and the newest stay: the run's ends.
   for (std::size_t i = 1; i + 1 < entries_.size(); ++i) {
-    if (entries_[i].nearest > kUniqueViewpoint) continue;
+    if (entries_[i].on_disk || entries_[i].nearest > kUniqueViewpoint) continue;
     // (Absolute: a continued session's keyframes follow the saved ones', whose clock may be
     // another's.)
     const double gap = std::abs(entries_[i + 1].timestamp - entries_[i - 1].timestamp);
@@ -45,12 +47,62 @@ std::size_t KeyframeStore::mostRedundant() const {
       best = i;
     }
   }
-  if (best < entries_.size()) return best;
-  // Every viewpoint unique: the nearest pair's older one.
-  best = 0;
-  for (std::size_t i = 1; i + 1 < entries_.size(); ++i)
-    if (entries_[i].nearest < entries_[best].nearest) best = i;
   return best;
+}
+
+// The oldest keyframe in memory but the newest (the one being added); none: size().
+std::size_t KeyframeStore::oldestInMemory() const {
+  for (std::size_t i = 0; i + 1 < entries_.size(); ++i)
+    if (!entries_[i].on_disk) return i;
+  return entries_.size();
+}
+
+// With no disk, every viewpoint unique: the one in memory nearest another, but the newest.
+std::size_t KeyframeStore::nearestInMemory() const {
+  std::size_t best = entries_.size();
+  for (std::size_t i = 0; i + 1 < entries_.size(); ++i)
+    if (!entries_[i].on_disk &&
+        (best == entries_.size() || entries_[i].nearest < entries_[best].nearest))
+      best = i;
+  return best;
+}
+
+bool KeyframeStore::moveToDisk(std::size_t i) {
+  if (disk_refused_) return false;
+  Entry& e = entries_[i];
+  std::string error;
+  if (!spill_.append(*e.depth_png, *e.colour_png, e.disk_offset, error)) {
+    spdlog::warn(
+        "{}: keyframes beyond loop.keyframe_memory are let go from now on, and a pass after a "
+        "loop will leave out what only they saw",
+        error);
+    disk_refused_ = true;
+    return false;
+  }
+  bytes_ -= e.imageBytes();
+  e.depth_bytes = e.depth_png->size();
+  e.colour_bytes = e.colour_png->size();
+  e.depth_png.reset();
+  e.colour_png.reset();
+  e.on_disk = true;
+  ++on_disk_;
+  return true;
+}
+
+std::vector<std::size_t> KeyframeStore::fitBudget() {
+  std::vector<std::size_t> let_go;
+  while (bytes_ > budget_bytes_ && entries_.size() > 2) {
+    std::size_t i = mostRedundant();
+    if (i == entries_.size()) {
+      const std::size_t oldest = oldestInMemory();
+      if (oldest < entries_.size() && moveToDisk(oldest)) continue;
+      i = nearestInMemory();
+      if (i == entries_.size()) break;
+    }
+    letGo(i);
+    let_go.push_back(i);
+  }
+  return let_go;
 }
 
 void KeyframeStore::letGo(std::size_t i) {
@@ -102,13 +154,7 @@ std::vector<std::size_t> KeyframeStore::add(Entry e) {
     e.nearest = std::min(e.nearest, d);
   }
   entries_.push_back(std::move(e));
-  std::vector<std::size_t> let_go;
-  while (bytes_ > budget_bytes_ && entries_.size() > 2) {
-    const std::size_t redundant = mostRedundant();
-    letGo(redundant);
-    let_go.push_back(redundant);
-  }
-  return let_go;
+  return fitBudget();
 }
 
 void KeyframeStore::adopt(std::vector<Entry> earlier) {
@@ -116,10 +162,30 @@ void KeyframeStore::adopt(std::vector<Entry> earlier) {
   entries_.insert(entries_.begin(), std::make_move_iterator(earlier.begin()),
                   std::make_move_iterator(earlier.end()));
   for (std::size_t i = 0; i < entries_.size(); ++i) findNearest(i);
-  while (bytes_ > budget_bytes_ && entries_.size() > 2) letGo(mostRedundant());
+  fitBudget();
 }
 
-void KeyframeStore::decode(std::size_t i, Frame& frame) { decode(entries_.at(i), frame); }
+std::vector<KeyframeStore::Entry> KeyframeStore::entries() const {
+  std::vector<Entry> in_memory;
+  in_memory.reserve(entries_.size() - on_disk_);
+  for (const Entry& e : entries_)
+    if (!e.on_disk) in_memory.push_back(e);
+  return in_memory;
+}
+
+void KeyframeStore::decode(std::size_t i, Frame& frame) {
+  const Entry& e = entries_.at(i);
+  if (!e.on_disk) return decode(e, frame);
+  std::vector<std::uint8_t> depth, colour;
+  std::string error;
+  if (!spill_.read(e.disk_offset, e.depth_bytes, depth, error) ||
+      !spill_.read(e.disk_offset + e.depth_bytes, e.colour_bytes, colour, error))
+    throw std::runtime_error(error);
+  Entry loaded = e;
+  loaded.depth_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(depth));
+  loaded.colour_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(colour));
+  decode(loaded, frame);
+}
 
 void KeyframeStore::decode(const Entry& e, Frame& frame) {
   std::string error;

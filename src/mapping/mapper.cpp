@@ -162,8 +162,8 @@ bool Mapper::refine(int keyframes) {
     stats_.keyframes_refused.fetch_add(1);
   }
   if (refused_at_.size() == store_.size()) {
-    // Caught up: the map is every kept keyframe at its corrected pose (keyframes let go to stay
-    // within the budget are not in it), and is shown again.
+    // Caught up: the map is every kept keyframe at its corrected pose (those in memory and those
+    // on disk; the ones let go saw what a kept one sees), and is shown again.
     shown_.reset();
     shown_mesh_.reset();
     map_.releaseUnused();

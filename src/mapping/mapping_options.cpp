@@ -75,8 +75,9 @@ Keys refusionKeys(RefusionOptions& o) {
               "with loop closure: keyframes fused again per new keyframe while the map follows a "
               "loop"),
       number("loop.keyframe_memory", &o.keyframe_memory, 1, 1000000,
-             "with loop closure: MB of kept keyframe images (for re-fusion); beyond it keyframes "
-             "are let go evenly over time, a viewpoint seen once last"),
+             "with loop closure: MB of kept keyframe images in memory (for re-fusion); beyond "
+             "it those whose viewpoint another shares are let go evenly over time, and views "
+             "seen once move to a scratch file on disk (in TMPDIR, else /tmp)"),
   };
 }
 

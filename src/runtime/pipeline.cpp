@@ -203,6 +203,9 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
   stats.peak_rss_mb = peakRssMb();
   stats.kept_keyframes_mb =
       static_cast<double>(mapper.keptKeyframes().memoryBytes()) / (1024.0 * 1024.0);
+  stats.kept_keyframes_on_disk = mapper.keptKeyframes().onDisk();
+  stats.kept_keyframes_disk_mb =
+      static_cast<double>(mapper.keptKeyframes().diskBytes()) / (1024.0 * 1024.0);
   stats.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
   stats.place_database_mb = static_cast<double>(stats.place_bytes.load()) / (1024.0 * 1024.0);
   return exit_code;

@@ -91,6 +91,9 @@ struct RunStats {
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
   double map_memory_mb = 0.0;      // the map at the end: TSDF blocks and index, kept keyframes
   double kept_keyframes_mb = 0.0;  // of which the kept keyframes' images (loop closure)
+  // Kept keyframes whose images went to disk (beyond loop.keyframe_memory), and their bytes.
+  std::uint64_t kept_keyframes_on_disk = 0;
+  double kept_keyframes_disk_mb = 0.0;
   double place_database_mb = 0.0;  // loop closure's places (ORB features, dense references)
 
   double wall_seconds = 0.0;

@@ -9,6 +9,7 @@
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/png_decoder.hpp"
 #include "rgbdmap/base/png_encoder.hpp"
+#include "rgbdmap/mapping/spill_file.hpp"
 
 namespace rgbdmap {
 
@@ -22,12 +23,18 @@ double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b)
 // voxel at 1 m spans five pixels; colour does not move surfaces): about 0.16 MB a keyframe of
 // TUM's at 640 x 480, 0.3 MB a synthetic one (its noise is not quantised as a Kinect's is).
 //
-// Memory is bounded: every keyframe is kept while the images fit in `budget_bytes`; beyond it one
-// is let go at a time: the one whose neighbours in time are nearest each other, among those whose
-// viewpoint another kept keyframe shares (within 0.3 m, a turn counting 2 m per radian; poses as
-// corrected when they were fused). A short run keeps every keyframe (its map re-fuses exactly); a
-// long one keeps keyframes spread evenly over the time spent, and every viewpoint seen only once,
-// so a camera at rest or walking laps round a room thins what it has seen again and again.
+// Memory is bounded, and nothing seen is forgotten: every keyframe's images are kept in memory
+// while they fit in `budget_bytes`. Beyond it, one keyframe at a time gives up its place: among
+// those whose viewpoint another kept keyframe shares (within 0.3 m, a turn counting 2 m per
+// radian; poses as corrected when they were fused), the one whose neighbours in time are nearest
+// each other is let go (what it saw, the other sees too); when every viewpoint in memory is unique,
+// the oldest one's images move to a scratch file on disk (SpillFile), from which a pass reads them
+// back. So a short run keeps every keyframe in memory (its map re-fuses exactly); a long one keeps
+// keyframes spread evenly over the time spent, a camera at rest or walking laps round a room
+// thins what it has seen again and again, and a building walked once keeps every view, those
+// beyond the budget on disk. (Letting go of unique views instead, as before, took 60% of a 16 x
+// 12 m room's surface out of the map at the next pass.) Should the disk refuse, the store says so
+// once and lets the oldest unique views go.
 class KeyframeStore {
  public:
   struct Entry {
@@ -40,6 +47,12 @@ class KeyframeStore {
     // without copying (tens of MB).
     std::shared_ptr<const std::vector<std::uint8_t>> depth_png, colour_png;
     double nearest = 0.0;  // viewpoint distance to the nearest other kept keyframe
+    // On disk: the images are in the store's SpillFile (depth at disk_offset, colour after it),
+    // depth_png and colour_png are empty.
+    bool on_disk = false;
+    std::uint64_t disk_offset = 0;
+    std::size_t depth_bytes = 0, colour_bytes = 0;
+    // The images' bytes in memory.
     std::size_t imageBytes() const {
       return (depth_png ? depth_png->size() : 0) + (colour_png ? colour_png->size() : 0);
     }
@@ -48,25 +61,30 @@ class KeyframeStore {
   explicit KeyframeStore(std::size_t budget_bytes) : budget_bytes_(budget_bytes) {}
 
   // Keeps the frame's images (`fused_at`: the corrected pose it was fused at), then lets kept
-  // keyframes go while over budget. Returns the indices let go, each as it was when let go.
+  // keyframes go, or moves their images to disk, while over budget. Returns the indices let go,
+  // each as it was when let go.
   std::vector<std::size_t> add(const Frame& frame, const Eigen::Isometry3d& fused_at);
   // The same for an entry encoded already (encode(), here or by another store).
   std::vector<std::size_t> add(Entry entry);
   // The frame's images as the store keeps them (not kept: see add()).
   Entry encode(const Frame& frame, const Eigen::Isometry3d& fused_at);
   // Takes in `earlier` (a saved session's kept keyframes, with their poses in this store's frame)
-  // before the keyframes kept so far, then lets kept keyframes go while over budget.
+  // before the keyframes kept so far, then fits the budget as add() does.
   void adopt(std::vector<Entry> earlier);
   std::size_t size() const { return entries_.size(); }
   Entry& operator[](std::size_t i) { return entries_[i]; }
   const Entry& operator[](std::size_t i) const { return entries_[i]; }
   // The stored images back into `frame` (depth in metres, colour BGR), with the entry's
-  // timestamp, index, anchor and odometry pose.
+  // timestamp, index, anchor and odometry pose; read from disk when they are there.
   void decode(std::size_t i, Frame& frame);
-  // The same for an entry of another store (a saved session's).
+  // The same for an entry of another store (a saved session's: its images in memory).
   void decode(const Entry& entry, Frame& frame);
-  // The kept keyframes as they are now (the images shared, not copied).
-  std::vector<Entry> entries() const { return entries_; }
+  // The kept keyframes whose images are in memory, as they are now (the images shared, not
+  // copied): what a session saves. Those on disk are this run's alone.
+  std::vector<Entry> entries() const;
+  // Kept keyframes whose images are on disk, and the bytes the disk holds for them.
+  std::size_t onDisk() const { return on_disk_; }
+  std::uint64_t diskBytes() const { return spill_.bytes(); }
   // How the images are stored (a session records them). Depth: a 16-bit PNG of K / depth
   // (inverse depth, as the Kinect measures it, in steps of 1 / K per metre): a step is
   // depth^2 / K, at most half the noise sigma (kinectDepthSigma) from 0.4 to 5 m, so the
@@ -80,12 +98,19 @@ class KeyframeStore {
 
  private:
   void findNearest(std::size_t i);
+  std::vector<std::size_t> fitBudget();
   std::size_t mostRedundant() const;
+  std::size_t oldestInMemory() const;
+  std::size_t nearestInMemory() const;
+  bool moveToDisk(std::size_t i);
   void letGo(std::size_t i);
 
   std::size_t budget_bytes_;
   std::vector<Entry> entries_;
-  std::size_t bytes_ = 0;
+  std::size_t bytes_ = 0;  // images in memory
+  SpillFile spill_;
+  std::size_t on_disk_ = 0;
+  bool disk_refused_ = false;
   PngEncoder encoder_;
   PngDecoder decoder_;
   cv::Mat units_, inverse_, half_;  // buffers
