@@ -145,6 +145,28 @@ class Arrivals {
   bool pending_ = false;
 };
 
+// TF from the merged frame to each placed robot's map frame.
+void broadcastPlacements(const std::vector<FleetMerger::Robot>& robots,
+                         const std::string& merged_frame, tf2_ros::TransformBroadcaster& tf) {
+  const ros::Time now = ros::Time::now();
+  for (const FleetMerger::Robot& r : robots) {
+    if (!r.placed) continue;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = now;
+    t.header.frame_id = merged_frame;
+    t.child_frame_id = frameOf(r.name);
+    const Eigen::Quaterniond q(r.transform.linear());
+    t.transform.translation.x = r.transform.translation().x();
+    t.transform.translation.y = r.transform.translation().y();
+    t.transform.translation.z = r.transform.translation().z();
+    t.transform.rotation.x = q.x();
+    t.transform.rotation.y = q.y();
+    t.transform.rotation.z = q.z();
+    t.transform.rotation.w = q.w();
+    tf.sendTransform(t);
+  }
+}
+
 int runMerger() {
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -220,23 +242,7 @@ int runMerger() {
         resend_wanted[i].store(true);
     }
     const bool changed = merger.merge();
-    const ros::Time now = ros::Time::now();
-    for (const FleetMerger::Robot& r : merger.robots()) {
-      if (!r.placed) continue;
-      geometry_msgs::TransformStamped t;
-      t.header.stamp = now;
-      t.header.frame_id = s.merged_frame;
-      t.child_frame_id = frameOf(r.name);
-      const Eigen::Quaterniond q(r.transform.linear());
-      t.transform.translation.x = r.transform.translation().x();
-      t.transform.translation.y = r.transform.translation().y();
-      t.transform.translation.z = r.transform.translation().z();
-      t.transform.rotation.x = q.x();
-      t.transform.rotation.y = q.y();
-      t.transform.rotation.z = q.z();
-      t.transform.rotation.w = q.w();
-      tf.sendTransform(t);
-    }
+    broadcastPlacements(merger.robots(), s.merged_frame, tf);
     if (changed) map_stale.store(true);
     // Until records arrive (a merge costs what arrived since the last: a place shared is placed
     // within a second), and at least every ~merge_interval s for TF.
