@@ -11,8 +11,13 @@
 namespace rgbdmap {
 namespace {
 
-constexpr double kLeverArm = 2.0;         // m
-constexpr double kUniqueViewpoint = 0.3;  // viewpoint distance (m) with no kept keyframe within
+constexpr double kLeverArm = 2.0;  // m
+// Viewpoint distance (m) within which another kept keyframe sees what a keyframe sees: a camera
+// at rest, or a lap's keyframe beside one of an earlier lap. Wider thinned a walk along the walls
+// of a 16 x 12 m room (1800 frames, a 16 MB budget) until a pass lost what only the let-go saw:
+// 0.3 m kept 0.35 of the surface, 0.1 m 0.89, 3 cm 0.98 (every keyframe kept: the same); the
+// keyframe policy's 5 cm steps keep a walk's keyframes apart.
+constexpr double kUniqueViewpoint = 0.03;
 
 }  // namespace
 

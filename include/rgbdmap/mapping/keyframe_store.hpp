@@ -25,7 +25,7 @@ double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b)
 //
 // Memory is bounded, and nothing seen is forgotten: every keyframe's images are kept in memory
 // while they fit in `budget_bytes`. Beyond it, one keyframe at a time gives up its place: among
-// those whose viewpoint another kept keyframe shares (within 0.3 m, a turn counting 2 m per
+// those whose viewpoint another kept keyframe shares (within 3 cm, a turn counting 2 m per
 // radian; poses as corrected when they were fused), the one whose neighbours in time are nearest
 // each other is let go (what it saw, the other sees too); when every viewpoint in memory is unique,
 // the oldest one's images move to a scratch file on disk (SpillFile), from which a pass reads them
