@@ -240,8 +240,8 @@ TEST(KeptKeyframes, LapsOfTheRoomHoldAfterTheSixthWhatTheyHeldAfterTheSecond) {
 
 // Nothing seen is forgotten: a space walked once (every view unique), with a budget that holds a
 // few of its keyframes' images, keeps the rest on disk, and a pass after a loop fuses them all:
-// the map it gives is the one an unbounded budget gives, voxel for voxel. (Letting unique views go,
-// as before, took 60% of a 16 x 12 m room out of the map at a pass.)
+// the map it gives is the one an unbounded budget gives, voxel for voxel. (Before, the older of
+// the two nearest views was let go, and what only it saw left the map at the pass.)
 TEST(KeptKeyframes, AViewSeenOnceBeyondTheBudgetIsKeptOnDiskAndStaysInTheMap) {
   Config config;
   const std::vector<Frame> lap = lapViews(config);

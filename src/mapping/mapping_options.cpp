@@ -76,8 +76,8 @@ Keys refusionKeys(RefusionOptions& o) {
               "loop"),
       number("loop.keyframe_memory", &o.keyframe_memory, 1, 1000000,
              "with loop closure: MB of kept keyframe images in memory (for re-fusion); beyond "
-             "it those whose viewpoint another shares are let go evenly over time, and views "
-             "seen once move to a scratch file on disk (in TMPDIR, else /tmp)"),
+             "it keyframes are let go evenly over time, and when every viewpoint kept is unique "
+             "the oldest move to a scratch file on disk (in TMPDIR, else /tmp)"),
   };
 }
 

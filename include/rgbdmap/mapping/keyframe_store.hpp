@@ -23,18 +23,18 @@ double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b)
 // voxel at 1 m spans five pixels; colour does not move surfaces): about 0.16 MB a keyframe of
 // TUM's at 640 x 480, 0.3 MB a synthetic one (its noise is not quantised as a Kinect's is).
 //
-// Memory is bounded, and nothing seen is forgotten: every keyframe's images are kept in memory
-// while they fit in `budget_bytes`. Beyond it, one keyframe at a time gives up its place: among
-// those whose viewpoint another kept keyframe shares (within 3 cm, a turn counting 2 m per
-// radian; poses as corrected when they were fused), the one whose neighbours in time are nearest
-// each other is let go (what it saw, the other sees too); when every viewpoint in memory is unique,
-// the oldest one's images move to a scratch file on disk (SpillFile), from which a pass reads them
-// back. So a short run keeps every keyframe in memory (its map re-fuses exactly); a long one keeps
-// keyframes spread evenly over the time spent, a camera at rest or walking laps round a room
-// thins what it has seen again and again, and a building walked once keeps every view, those
-// beyond the budget on disk. (Letting go of unique views instead, as before, took 60% of a 16 x
-// 12 m room's surface out of the map at the next pass.) Should the disk refuse, the store says so
-// once and lets the oldest unique views go.
+// Memory is bounded: every keyframe's images are kept in memory while they fit in
+// `budget_bytes`. Beyond it, one keyframe at a time gives up its place: among those whose
+// viewpoint another kept keyframe shares (within 0.3 m, a turn counting 2 m per radian; poses as
+// corrected when they were fused), the one whose neighbours in time are nearest each other is let
+// go; when every viewpoint in memory is unique, the oldest one's images move to a scratch file on
+// disk (SpillFile), from which a pass reads them back (before, the older of the two nearest was
+// let go, and what only it saw left the map at the next pass). So a short run keeps every keyframe
+// in memory (its map re-fuses exactly); a long one keeps keyframes spread evenly over the time
+// spent, and a camera at rest or walking laps round a room thins what it has seen again and
+// again. A viewpoint shared within 0.3 m does not see all the other sees: thinning a large space
+// walked once still loses surface at a pass (docs/loop-closure.md). Should the disk refuse, the
+// store says so once and lets the oldest unique views go.
 class KeyframeStore {
  public:
   struct Entry {
