@@ -49,7 +49,8 @@ pcl::PointCloud<pcl::PointXYZRGB> samplePoints(const TriangleMesh& mesh, double 
 }
 
 TEST(MeshRoom, SampledMeshScoresAgainstTheExactRoom) {
-  const std::string room = test::sharedSynthetic("mesh_room", " --room 6x5x3 --fps 10 --frames 90");
+  const std::string room =
+      test::sharedSynthetic("room_6x5x3_90_frames", " --room 6x5x3 --fps 10 --frames 90");
   const std::string dir = test::freshDir();
   std::string output;
   const auto start = std::chrono::steady_clock::now();

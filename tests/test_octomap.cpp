@@ -42,7 +42,8 @@ TEST(FreeSpaceMap, MarksTheCellsARayCrossesUpToItsSurface) {
 }
 
 TEST(Octomap, OfTheSyntheticRoomHoldsItsSurfacesAndTheSpaceSeenThrough) {
-  const std::string room = test::sharedSynthetic("mesh_room", " --room 6x5x3 --fps 10 --frames 90");
+  const std::string room =
+      test::sharedSynthetic("room_6x5x3_90_frames", " --room 6x5x3 --fps 10 --frames 90");
   const std::string dir = test::freshDir();
   std::string output;
   ASSERT_EQ(test::run(test::binary() + " --source tum:" + room + " --out " + dir +

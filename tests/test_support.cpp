@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <pcl/io/pcd_io.h>
 #include <poll.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 
@@ -156,24 +157,50 @@ std::string readFile(const std::string& path) {
   return s.str();
 }
 
-std::string sharedSynthetic(const std::string& name, const std::string& synth_options) {
+std::string writeOnce(const std::string& folder,
+                      const std::function<void(const std::string&)>& write) {
   namespace fs = std::filesystem;
-  const std::string folder = std::string(RGBDMAP_TEST_TMP) + "/synthetic/" + name;
-  if (fs::exists(folder + "/visible_surface.pcd")) return folder;
+  const std::string done = folder + "/.complete";
+  if (fs::exists(done)) return folder;
   fs::create_directories(fs::path(folder).parent_path());
-  // Written under a private name and renamed into place when complete: CTest runs tests in
-  // parallel processes, and the loser of a race discards its copy.
-  const std::string mine = folder + "." + std::to_string(::getpid());
-  std::string output;
-  if (run(binary() + " synth --out " + mine + synth_options, &output) != 0) {
-    ADD_FAILURE() << "rgbdmap synth" << synth_options << " failed:\n" << output;
+  // CTest runs tests in parallel processes: the first to ask writes, the others wait for it (an
+  // advisory lock, which the kernel releases if the writer dies).
+  const int lock = ::open((folder + ".lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock >= 0) ::flock(lock, LOCK_EX);
+  if (!fs::exists(done)) {
+    // Written under a private name and renamed into place when complete: a writer cut short
+    // leaves nothing a later test would take for the whole.
+    const std::string mine = folder + "." + std::to_string(::getpid());
     fs::remove_all(mine);
-    return folder;
+    fs::create_directories(mine);
+    write(mine);
+    if (!::testing::Test::HasFatalFailure()) {
+      std::ofstream(mine + "/.complete") << "\n";
+      std::error_code ec;
+      fs::remove_all(folder, ec);
+      fs::rename(mine, folder, ec);
+      if (ec) ADD_FAILURE() << "cannot move " << mine << " to " << folder << ": " << ec.message();
+    }
+    fs::remove_all(mine);
   }
-  std::error_code ec;
-  fs::rename(mine, folder, ec);
-  if (ec) fs::remove_all(mine);
+  if (lock >= 0) ::close(lock);
   return folder;
+}
+
+std::string sharedSynthetic(const std::string& name, const std::string& synth_options) {
+  // scripts/test.sh points the sanitizer builds at the release build's sequences: rendering them
+  // again under a sanitizer tests nothing new (the renderer has tests of its own) and took most
+  // of a sanitized test's time.
+  const char* shared = std::getenv("RGBDMAP_TEST_SYNTHETIC_DIR");
+  const std::string parent =
+      shared && *shared ? std::string(shared) : std::string(RGBDMAP_TEST_TMP) + "/synthetic";
+  return writeOnce(parent + "/" + name, [&](const std::string& folder) {
+    std::string output;
+    // synth writes into a folder of its own.
+    std::filesystem::remove_all(folder);
+    if (run(binary() + " synth --out " + folder + synth_options, &output) != 0)
+      FAIL() << "rgbdmap synth" << synth_options << " failed:\n" << output;
+  });
 }
 
 std::string copySequence(const std::string& source, const std::string& target) {

@@ -54,8 +54,13 @@ bool waitUntil(const std::function<bool()>& condition, double timeout_s = 120.0)
 // A number from flat JSON ("key": value, as --stats and `evaluate --json` write); a test failure
 // and NaN when the key is missing.
 double jsonNumber(const std::string& json, const std::string& key);
-// A `rgbdmap synth` sequence written once per build into <build>/tests/tmp/synthetic/<name>
-// and shared by the tests (and processes) that ask for it by the same name and options.
+// `folder`, written once by `write` (given a private folder, renamed into place when `write`
+// returns without a fatal failure) and shared by every test and process that asks for it.
+std::string writeOnce(const std::string& folder,
+                      const std::function<void(const std::string&)>& write);
+// A `rgbdmap synth` sequence written once into <build>/tests/tmp/synthetic/<name> (or
+// $RGBDMAP_TEST_SYNTHETIC_DIR/<name>) and shared by the tests (and processes) that ask for it by
+// the same name and options.
 std::string sharedSynthetic(const std::string& name, const std::string& synth_options);
 // Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
 std::string copySequence(const std::string& source, const std::string& target);

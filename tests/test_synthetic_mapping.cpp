@@ -66,27 +66,12 @@ MappingResult mapAndEvaluate(const std::string& sequence, const std::string& out
   return r;
 }
 
-// One large-room sequence for the tests below (generating it is most of their time). CTest
-// runs each test in its own process, so the sequence is generated once into a shared folder:
-// written under a private name, then renamed into place (the loser of a race discards its copy).
+// One large-room sequence for the tests below (generating it is most of their time), written
+// once for all of them (CTest runs each test in its own process).
 class LargeRoom : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    namespace fs = std::filesystem;
-    const std::string shared = std::string(RGBDMAP_TEST_TMP) + "/LargeRoom";
-    fs::create_directories(shared);
-    if (!fs::exists(shared + "/room/visible_surface.pcd")) {
-      const std::string mine = shared + "/room." + std::to_string(::getpid());
-      std::string output;
-      const auto start = std::chrono::steady_clock::now();
-      ASSERT_EQ(test::run(test::binary() + " synth --out " + mine + kLargeRoom, &output), 0)
-          << output;
-      std::cout << "synth " << kFrames << " frames: " << secondsSince(start) << " s\n";
-      std::error_code ec;
-      fs::rename(mine, shared + "/room", ec);
-      if (ec) fs::remove_all(mine);
-    }
-    room_ = new std::string(shared + "/room");
+    room_ = new std::string(test::sharedSynthetic("room_6x5x3_90_frames", kLargeRoom));
   }
   static void TearDownTestSuite() {
     delete room_;

@@ -149,25 +149,21 @@ class SyntheticSequenceTest : public ::testing::Test {
   static std::string noisy_, clean_;
 
   static void SetUpTestSuite() {
-    // One folder per process: CTest runs each test of this suite as its own process, in
-    // parallel with -j.
-    root_ = std::string(RGBDMAP_TEST_TMP) + "/SyntheticSequenceTest." + std::to_string(::getpid());
-    const std::string& root = root_;
-    std::filesystem::remove_all(root);
+    // CTest runs each test of this suite as its own process: the first writes the sequences,
+    // the others read them.
+    const std::string root = test::writeOnce(
+        std::string(RGBDMAP_TEST_TMP) + "/SyntheticSequenceTest", [](const std::string& folder) {
+          SyntheticSequenceOptions options;
+          options.frames = kFrames;
+          options.seed = kSeed;
+          writeSyntheticSequence(folder + "/noisy", SyntheticScene::defaultRoom(), options);
+          options.noise = false;
+          writeSyntheticSequence(folder + "/clean", SyntheticScene::defaultRoom(), options);
+        });
     noisy_ = root + "/noisy";
     clean_ = root + "/clean";
-    SyntheticSequenceOptions options;
-    options.frames = kFrames;
-    options.seed = kSeed;
-    writeSyntheticSequence(noisy_, SyntheticScene::defaultRoom(), options);
-    options.noise = false;
-    writeSyntheticSequence(clean_, SyntheticScene::defaultRoom(), options);
   }
-  static void TearDownTestSuite() { std::filesystem::remove_all(root_); }
-
-  static std::string root_;
 };
-std::string SyntheticSequenceTest::root_;
 std::string SyntheticSequenceTest::noisy_;
 std::string SyntheticSequenceTest::clean_;
 
