@@ -3,8 +3,8 @@ include(GoogleTest)
 
 # What each sanitizer run of scripts/test.sh builds: the programs whose tests it runs, and what
 # those run. ThreadSanitizer takes the threaded programs (label threads, threads-openni2),
-# AddressSanitizer + UBSan the rest but those at scale (and the OpenNI2 ones, threaded but run
-# there too: their drivers parse what devices send).
+# AddressSanitizer + UBSan the rest but those at scale and the ROS programs that start a master
+# (and the OpenNI2 ones, threaded but run there too: their drivers parse what devices send).
 add_custom_target(threaded_tests)
 add_custom_target(asan_tests)
 
@@ -27,7 +27,7 @@ endfunction()
 # Each TEST of the program's source file becomes a CTest test labelled <label>, or <label>-long when
 # tests/long_tests.cmake names it. One label a test: ctest -L and -LE take regular expressions,
 # so "threads-long" is selected by -L threads and left out by -LE long. RGBDMAP_LONG_TESTS is set
-# by the calling folder (tests/long_tests.cmake, ros/tests/CMakeLists.txt). The tests are read from
+# by the calling folder (tests/long_tests.cmake). The tests are read from
 # the source at configure time (gtest_add_tests) rather than listed by running each program after
 # it is built: that cost 1-3 s a program and build, and a test needs its own label before then.
 function(rgbdmap_add_tests name)
@@ -36,7 +36,7 @@ function(rgbdmap_add_tests name)
   if(arg_LABEL MATCHES "^threads")
     add_dependencies(threaded_tests ${name})
   endif()
-  if(NOT arg_LABEL MATCHES "^threads$|^scale$")
+  if(NOT arg_LABEL MATCHES "^threads$|^scale$|master")
     add_dependencies(asan_tests ${name})
   endif()
   set_tests_properties(${tests} PROPERTIES LABELS ${arg_LABEL} TIMEOUT ${arg_TIMEOUT}
