@@ -9,6 +9,11 @@ set(RGBDMAP_LONG_TESTS
   # it is the one that runs loops, passes and checkpoints together under ThreadSanitizer)
   Odometry.TracksASyntheticRoomToMillimetres
   PipelineTracking.OdometryMapOfASyntheticRoomIsCloseToTheExactPoseMap
+  # Frame-to-frame tracking on rendered rooms and 100 real frames (7 s each; 30-40 s under ASan;
+  # Tracking.Fr1XyzEveryFrame, the jump, blank and frozen frames stay)
+  Tracking.SyntheticFastPan
+  Tracking.SyntheticDeepRoom
+  Tracking.Fr1RpyHead100EveryFrame
   # Real sequences end to end, and runs repeated to compare them (95-160 s under ThreadSanitizer;
   # PipelineReplay.Fr1XyzEndToEnd stays)
   PipelineReplay.Fr1RpyHead100EndToEnd
