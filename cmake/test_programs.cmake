@@ -8,10 +8,10 @@ include(GoogleTest)
 add_custom_target(threaded_tests)
 add_custom_target(asan_tests)
 
-# A test program or library: the project's warnings, the shared precompiled headers, and -O1 for its own
-# code in optimised builds. What a test exercises runs in the layers, compiled as the build says
-# (-O3 in release); a test file's own code compiles in half the time at -O1 (14 s -> 7 s for
-# test_png_decoder.cpp), and the test programs were 40% of a release build.
+# A test program or library: the project's warnings, the shared precompiled headers, and -O1
+# for its own code in optimised builds. What a test exercises runs in the layers, compiled as the
+# build says (-O3 in release); a test file's own code compiles in half the time at -O1 (14 s ->
+# 7 s for test_png_decoder.cpp), and the test programs were 40% of a release build.
 # NO_PRECOMPILED_HEADERS: for programs whose include paths differ from the layers' (ROS).
 function(rgbdmap_test_target name)
   cmake_parse_arguments(arg "NO_PRECOMPILED_HEADERS" "" "" ${ARGN})
@@ -24,8 +24,8 @@ endfunction()
 
 # rgbdmap_add_tests(<program> SOURCE <file> LABEL <label> TIMEOUT <s>
 #                   [PROPERTIES <ctest properties>...])
-# Each TEST of the program's source file becomes a CTest test labelled <label>, or <label>-long when
-# tests/long_tests.cmake names it. One label a test: ctest -L and -LE take regular expressions,
+# Each TEST of the program's source file becomes a CTest test labelled <label>, or <label>-long
+# when tests/long_tests.cmake names it. One label a test: ctest -L and -LE take regular expressions,
 # so "threads-long" is selected by -L threads and left out by -LE long. RGBDMAP_LONG_TESTS is set
 # by the calling folder (tests/long_tests.cmake). The tests are read from
 # the source at configure time (gtest_add_tests) rather than listed by running each program after

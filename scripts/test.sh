@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds, and runs the test suite three times: a release build, the
 # threaded tests under ThreadSanitizer, and the rest under AddressSanitizer + UBSan. The tests
-# of map quality at scale (label `scale`) and those of 20 s or more in release (labels ending
-# in `-long`) run in the release build only: the sanitizer runs take the shorter tests, which
-# run the same code (docs/testing.md).
+# of map quality at scale (label `scale`), the long ones (6 s or more in release, labels ending
+# in `-long`, tests/long_tests.cmake) and the ROS node's and merger's (label `ros-master`) run in
+# the release build only: the sanitizer runs take the shorter tests, which run the same code
+# (docs/testing.md).
 # Usage: bash scripts/test.sh [--quick]   (--quick: release build only)
 set -euo pipefail
 cd "$(dirname "$0")/.."
