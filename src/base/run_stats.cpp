@@ -73,6 +73,7 @@ std::string RunStats::toJson() const {
       << "  \"loops_rejected\": " << loops_rejected << ",\n"
       << "  \"loop_keyframes_unsearched\": " << loop_keyframes_unsearched << ",\n"
       << "  \"map_refusions\": " << map_refusions << ",\n"
+      << "  \"region_refusions\": " << region_refusions << ",\n"
       << "  \"keyframes_refused\": " << keyframes_refused << ",\n"
       << "  \"wall_seconds\": " << wall_seconds << ",\n"
       << "  \"frames_per_second\": "

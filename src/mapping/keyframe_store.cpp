@@ -12,12 +12,16 @@ namespace rgbdmap {
 namespace {
 
 constexpr double kLeverArm = 2.0;  // m
-// Viewpoint distance (m) within which another kept keyframe is taken to see what a keyframe sees.
-// Narrower keeps more of a large space but spills every lap of a patrol to disk: on a 16 x 12 m
-// room walked once (16 MB budget) a pass kept 0.35 of the surface at 0.3 m, 0.89 at 0.1 m and
-// 0.98 at 3 cm, but at 3 cm ten laps of the 5 x 4 m room put 864 of 890 keyframes on disk and
-// their 13 passes re-fused 7265 keyframes. Until passes re-fuse by region, 0.3 m.
-constexpr double kUniqueViewpoint = 0.3;
+// Viewpoint distance (m) within which another kept keyframe of another visit is taken to see what
+// a keyframe sees (a camera back where it was: a patrol's laps, a room crossed twice).
+constexpr double kSharedViewpoint = 0.3;
+// Another visit: the camera went more than this far (viewpoint distance along its way) between the
+// two keyframes. Within one visit, neighbours 0.3 m apart do not see the same thing (a space
+// walked once, its keyframes thinned to one per 0.3 m, lost two thirds of its surface at the next
+// pass: docs/loop-closure.md), so there a view is shared only within a tenth of it (3 cm: a
+// camera at rest).
+constexpr double kRevisitPath = 2.0;
+constexpr double kSameVisitScale = 10.0;
 
 }  // namespace
 
@@ -26,24 +30,29 @@ double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b)
   return moved.translation().norm() + kLeverArm * Eigen::AngleAxisd(moved.linear()).angle();
 }
 
+double KeyframeStore::sharedDistance(const Entry& a, const Entry& b) {
+  const double d = viewpointDistance(a.fused_at, b.fused_at);
+  return std::abs(a.travelled - b.travelled) > kRevisitPath ? d : d * kSameVisitScale;
+}
+
 void KeyframeStore::findNearest(std::size_t i) {
   entries_[i].nearest = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < entries_.size(); ++j)
     if (j != i)
-      entries_[i].nearest = std::min(entries_[i].nearest,
-                                     viewpointDistance(entries_[i].fused_at, entries_[j].fused_at));
+      entries_[i].nearest = std::min(entries_[i].nearest, sharedDistance(entries_[i], entries_[j]));
 }
 
-// Among the keyframes in memory with another kept one within kUniqueViewpoint (a viewpoint seen
-// once is not let go), the one whose neighbours in time are nearest each other: what is kept stays
-// spread evenly over the run. (Letting go of the older of the two nearest viewpoints instead kept
-// 0.94 of the synthetic walk's surface with a 64 MB budget, this 0.98.) None: size().
+// Among the keyframes in memory whose view another kept one shares (sharedDistance() within
+// kSharedViewpoint; a viewpoint seen once is not let go), the one whose neighbours in time are
+// nearest each other: what is kept stays spread evenly over the run. (Letting go of the older of
+// the two nearest viewpoints instead kept 0.94 of the synthetic walk's surface with a 64 MB budget,
+// this 0.98.) None: size().
 std::size_t KeyframeStore::mostRedundant() const {
   std::size_t best = entries_.size();
   double best_gap = std::numeric_limits<double>::infinity();
   // The first and the newest stay: the run's ends.
   for (std::size_t i = 1; i + 1 < entries_.size(); ++i) {
-    if (entries_[i].on_disk || entries_[i].nearest > kUniqueViewpoint) continue;
+    if (entries_[i].on_disk || entries_[i].nearest > kSharedViewpoint) continue;
     // (Absolute: a continued session's keyframes follow the saved ones', whose clock may be
     // another's.)
     const double gap = std::abs(entries_[i + 1].timestamp - entries_[i - 1].timestamp);
@@ -111,13 +120,13 @@ std::vector<std::size_t> KeyframeStore::fitBudget() {
 }
 
 void KeyframeStore::letGo(std::size_t i) {
-  const Eigen::Isometry3d gone = entries_[i].fused_at;
+  const Entry gone = entries_[i];
   bytes_ -= entries_[i].imageBytes();
   entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(i));
   // Those whose nearest it may have been look again (the distance is not symmetric to the last
   // bit: a margin).
   for (std::size_t j = 0; j < entries_.size(); ++j)
-    if (viewpointDistance(entries_[j].fused_at, gone) <= entries_[j].nearest * (1 + 1e-9) + 1e-12)
+    if (sharedDistance(entries_[j], gone) <= entries_[j].nearest * (1 + 1e-9) + 1e-12)
       findNearest(j);
 }
 
@@ -152,9 +161,13 @@ std::vector<std::size_t> KeyframeStore::add(const Frame& frame, const Eigen::Iso
 
 std::vector<std::size_t> KeyframeStore::add(Entry e) {
   bytes_ += e.imageBytes();
+  e.id = next_id_++;
+  e.travelled = entries_.empty() ? 0.0
+                                 : entries_.back().travelled +
+                                       viewpointDistance(entries_.back().fused_at, e.fused_at);
   e.nearest = std::numeric_limits<double>::infinity();
   for (Entry& other : entries_) {
-    const double d = viewpointDistance(other.fused_at, e.fused_at);
+    const double d = sharedDistance(other, e);
     other.nearest = std::min(other.nearest, d);
     e.nearest = std::min(e.nearest, d);
   }
@@ -163,11 +176,30 @@ std::vector<std::size_t> KeyframeStore::add(Entry e) {
 }
 
 void KeyframeStore::adopt(std::vector<Entry> earlier) {
-  for (const Entry& e : earlier) bytes_ += e.imageBytes();
+  for (Entry& e : earlier) {
+    bytes_ += e.imageBytes();
+    e.id = next_id_++;
+  }
   entries_.insert(entries_.begin(), std::make_move_iterator(earlier.begin()),
                   std::make_move_iterator(earlier.end()));
+  // The way travelled, again in the new order (a saved session does not record it).
+  for (std::size_t i = 1; i < entries_.size(); ++i)
+    entries_[i].travelled = entries_[i - 1].travelled +
+                            viewpointDistance(entries_[i - 1].fused_at, entries_[i].fused_at);
   for (std::size_t i = 0; i < entries_.size(); ++i) findNearest(i);
   fitBudget();
+}
+
+std::size_t KeyframeStore::find(std::uint64_t id) const {
+  for (std::size_t i = 0; i < entries_.size(); ++i)
+    if (entries_[i].id == id) return i;
+  return entries_.size();
+}
+
+std::size_t KeyframeStore::memoryBytes() const {
+  std::size_t footprints = 0;
+  for (const Entry& e : entries_) footprints += e.footprint.memoryBytes();
+  return bytes_ + footprints + entries_.capacity() * sizeof(Entry);
 }
 
 std::vector<KeyframeStore::Entry> KeyframeStore::entries() const {

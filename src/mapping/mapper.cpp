@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 
 #include "rgbdmap/mapping/mesh_extractor.hpp"
@@ -21,6 +22,21 @@ constexpr std::uint64_t kPruneEvery = 10;
 constexpr std::uint64_t kPruneIdleKeyframes = 30;
 constexpr float kPruneClearanceVoxels = 2.0f;
 
+// Whether two sorted lists share an element.
+bool intersects(const std::vector<std::uint64_t>& a, const std::vector<std::uint64_t>& b) {
+  auto i = a.begin();
+  auto j = b.begin();
+  while (i != a.end() && j != b.end()) {
+    if (*i < *j)
+      ++i;
+    else if (*j < *i)
+      ++j;
+    else
+      return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, const MapOptions& map,
@@ -33,6 +49,7 @@ Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, cons
       corrections_(corrections),
       map_(voxel_size_, min_observations_),
       store_(static_cast<std::size_t>(refusion.keyframe_memory * 1024.0 * 1024.0)),
+      filter_(filter),
       keyframe_sink_(keyframe_trajectory ? keyframe_trajectory : &keyframes_),
       camera_(camera),
       stats_(stats) {}
@@ -58,12 +75,22 @@ void Mapper::fuse(const Frame& keyframe) {
   if (!corrections_) {
     integrate(keyframe, pose, map_);
   } else {
-    // While a pass runs the keyframe waits for it in the store (fused once, at the pass's poses).
+    // While a whole pass runs the keyframe waits for it in the store (fused once, at the pass's
+    // poses); a region pass fuses it again if it sees the region (its blocks there are the pass's).
     if (!refusing()) integrate(keyframe, pose, map_);
-    for (const std::size_t i : store_.add(keyframe, pose)) {
+    KeyframeStore::Entry entry = store_.encode(keyframe, pose);
+    entry.footprint = footprintOf(keyframe, pose);
+    const bool in_region = region_ && intersects(entry.footprint.cells(), region_->reach);
+    for (const std::size_t i : store_.add(std::move(entry))) {
       // Let go to stay within budget: a pass under way moves on without it.
-      if (refusing() && i < refused_at_.size())
+      if (refusing() && i < refused_at_.size()) {
         refused_at_.erase(refused_at_.begin() + static_cast<std::ptrdiff_t>(i));
+        refused_footprints_.erase(refused_footprints_.begin() + static_cast<std::ptrdiff_t>(i));
+      }
+    }
+    if (in_region) {
+      region_->keyframes.push_back(store_[store_.size() - 1].id);
+      region_->moved.push_back(false);
     }
     refine(refusion_.refusion_pace);
   }
@@ -131,26 +158,124 @@ bool Mapper::lagsCorrections(const PoseCorrections::Snapshot& correction) {
   return false;
 }
 
+KeyframeFootprint Mapper::footprintOf(const Frame& keyframe, const Eigen::Isometry3d& pose) const {
+  return KeyframeFootprint(keyframe.depth, camera_, pose, voxel_size_, filter_.min_depth,
+                           filter_.max_depth);
+}
+
 bool Mapper::refine(int keyframes) {
   if (!corrections_) return false;
-  if (!refusing()) {
-    // Joining a saved map takes in keyframes that are not in the TSDF at all: a pass in any case.
+  if (!refusing() && !region_) {
+    // Joining a saved map takes in keyframes that are not in the TSDF at all: a whole pass.
     const PoseCorrections::Snapshot latest = corrections_->snapshot();
-    if (!joinSaved(latest) && !lagsCorrections(latest)) return false;
-    // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
-    // while the pass fuses a new one in its place. The cloud is packed (16 bytes a point): it is
-    // kept to the pass's end, when the new TSDF is whole beside it.
-    auto cloud = std::make_shared<PackedMapCloud>();
-    map_.pointCount(&integrator_.pool());  // an exact count: the cloud is reserved to fit
-    map_.extract(*cloud);
-    stats_.map_points.store(cloud->size());
-    if (keep_meshes_) shown_mesh_ = std::make_shared<const TriangleMesh>(extractMesh(map_));
-    shown_ = std::move(cloud);
-    // Emptied, not freed: the pass fuses about as many blocks again into the same memory.
-    map_.clear();
-    refused_at_.clear();
+    const bool joined = joinSaved(latest);
+    if (!joined && !lagsCorrections(latest)) return false;
+    if (joined || !beginRegionPass(latest)) beginWholePass();
   }
   const auto start = std::chrono::steady_clock::now();
+  if (region_)
+    refineRegion(keyframes);
+  else
+    refineWhole(keyframes);
+  stats_.refuse_latency.record(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return true;
+}
+
+bool Mapper::beginRegionPass(const PoseCorrections::Snapshot& correction) {
+  if (refusion_.region_share <= 0.0) return false;
+  auto pass = std::make_unique<RegionPass>(voxel_size_, min_observations_);
+  std::vector<bool> moved(store_.size(), false);
+  for (std::size_t i = 0; i < store_.size(); ++i) {
+    const KeyframeStore::Entry& e = store_[i];
+    const Eigen::Isometry3d pose = corrected(correction, e.anchor, e.pose);
+    if (viewpointDistance(e.fused_at, pose) <= refusion_.refusion_shift) continue;
+    moved[i] = true;
+    const std::vector<std::uint64_t>& before = e.footprint.cells();
+    const KeyframeFootprint after = e.footprint.moved(pose * e.fused_at.inverse(), voxel_size_);
+    pass->cells.insert(pass->cells.end(), before.begin(), before.end());
+    pass->cells.insert(pass->cells.end(), after.cells().begin(), after.cells().end());
+  }
+  std::sort(pass->cells.begin(), pass->cells.end());
+  pass->cells.erase(std::unique(pass->cells.begin(), pass->cells.end()), pass->cells.end());
+  pass->reach = KeyframeFootprint::dilate(pass->cells);
+  for (std::size_t i = 0; i < store_.size(); ++i) {
+    if (!moved[i] && !intersects(store_[i].footprint.cells(), pass->reach)) continue;
+    pass->keyframes.push_back(store_[i].id);
+    pass->moved.push_back(moved[i]);
+  }
+  if (static_cast<double>(pass->keyframes.size()) >
+      refusion_.region_share * static_cast<double>(store_.size()))
+    return false;
+  region_ = std::move(pass);
+  return true;
+}
+
+void Mapper::refineRegion(int keyframes) {
+  RegionPass& pass = *region_;
+  // Each at the newest corrections, as a whole pass does.
+  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  for (int k = 0; k < keyframes && pass.fused.size() < pass.keyframes.size(); ++k) {
+    const std::size_t i = store_.find(pass.keyframes[pass.fused.size()]);
+    if (i == store_.size()) {  // let go meanwhile
+      pass.fused.emplace_back();
+      continue;
+    }
+    store_.decode(i, decoded_);
+    const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);
+    integrate(decoded_, pose, pass.map);
+    pass.fused.emplace_back(pose, footprintOf(decoded_, pose));
+    stats_.keyframes_refused.fetch_add(1);
+  }
+  if (pass.fused.size() < pass.keyframes.size()) return;
+  // The cells the moved keyframes' surfaces are in now, exactly (beginRegionPass() moved cells'
+  // centres): those next to the region are its too, since the pass fused every keyframe seeing
+  // them.
+  std::vector<std::uint64_t> cells = pass.cells;
+  for (std::size_t k = 0; k < pass.keyframes.size(); ++k) {
+    if (!pass.moved[k]) continue;
+    for (const std::uint64_t c : pass.fused[k].second.cells())
+      if (std::binary_search(pass.reach.begin(), pass.reach.end(), c)) cells.push_back(c);
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  map_.replaceRegion(pass.map, [&](const Eigen::Vector3i& block) {
+    return std::binary_search(cells.begin(), cells.end(),
+                              KeyframeFootprint::key(KeyframeFootprint::cellOf(block)));
+  });
+  // The moved keyframes are in the map at their new poses, whole: every cell they saw before and
+  // see now was fused again. The others only where they see the region: they stay at the poses
+  // they were fused at (within refusion_shift of their corrected ones).
+  for (std::size_t k = 0; k < pass.keyframes.size(); ++k) {
+    if (!pass.moved[k]) continue;
+    const std::size_t i = store_.find(pass.keyframes[k]);
+    if (i == store_.size()) continue;
+    store_[i].fused_at = pass.fused[k].first;
+    store_[i].footprint = std::move(pass.fused[k].second);
+  }
+  region_.reset();
+  stats_.region_refusions.fetch_add(1);
+  stats_.map_refusions.fetch_add(1);
+  next_count_ = {};
+}
+
+void Mapper::beginWholePass() {
+  // The map as it is stays shown (a cloud, and a mesh when asked for: a fraction of the TSDF)
+  // while the pass fuses a new one in its place. The cloud is packed (16 bytes a point): it is
+  // kept to the pass's end, when the new TSDF is whole beside it.
+  auto cloud = std::make_shared<PackedMapCloud>();
+  map_.pointCount(&integrator_.pool());  // an exact count: the cloud is reserved to fit
+  map_.extract(*cloud);
+  stats_.map_points.store(cloud->size());
+  if (keep_meshes_) shown_mesh_ = std::make_shared<const TriangleMesh>(extractMesh(map_));
+  shown_ = std::move(cloud);
+  // Emptied, not freed: the pass fuses about as many blocks again into the same memory.
+  map_.clear();
+  refused_at_.clear();
+  refused_footprints_.clear();
+}
+
+void Mapper::refineWhole(int keyframes) {
   // Each kept keyframe at the newest corrections: a loop closed meanwhile is taken in by the
   // rest of this pass, and the next pass (lagsCorrections) catches what it moved before.
   const PoseCorrections::Snapshot correction = corrections_->snapshot();
@@ -159,21 +284,22 @@ bool Mapper::refine(int keyframes) {
     const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);
     integrate(decoded_, pose, map_);
     refused_at_.push_back(pose);
+    refused_footprints_.push_back(footprintOf(decoded_, pose));
     stats_.keyframes_refused.fetch_add(1);
   }
-  if (refused_at_.size() == store_.size()) {
-    // Caught up: the map is every kept keyframe at its corrected pose (those in memory and those
-    // on disk; the ones let go saw what a kept one sees), and is shown again.
-    shown_.reset();
-    shown_mesh_.reset();
-    map_.releaseUnused();
-    for (std::size_t i = 0; i < refused_at_.size(); ++i) store_[i].fused_at = refused_at_[i];
-    stats_.map_refusions.fetch_add(1);
-    next_count_ = {};
+  if (refused_at_.size() < store_.size()) return;
+  // Caught up: the map is every kept keyframe at its corrected pose (those in memory and those
+  // on disk; the ones let go saw what a kept one sees), and is shown again.
+  shown_.reset();
+  shown_mesh_.reset();
+  map_.releaseUnused();
+  for (std::size_t i = 0; i < refused_at_.size(); ++i) {
+    store_[i].fused_at = refused_at_[i];
+    store_[i].footprint = std::move(refused_footprints_[i]);
   }
-  stats_.refuse_latency.record(
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  return true;
+  refused_footprints_.clear();
+  stats_.map_refusions.fetch_add(1);
+  next_count_ = {};
 }
 
 void Mapper::settle() {
@@ -192,6 +318,7 @@ std::size_t Mapper::memoryBytes() const {
   std::size_t saved = 0;
   for (const KeyframeStore::Entry& e : saved_) saved += e.imageBytes();
   return map_.memoryBytes() + store_.memoryBytes() + saved +
+         (region_ ? region_->map.memoryBytes() : 0) +
          (shown_ ? shown_->capacity() * sizeof(PackedMapPoint) : 0) +
          (shown_mesh_ ? shown_mesh_->memoryBytes() : 0) +
          (free_space_ ? free_space_->memoryBytes() : 0);

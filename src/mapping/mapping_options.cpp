@@ -76,8 +76,12 @@ Keys refusionKeys(RefusionOptions& o) {
               "loop"),
       number("loop.keyframe_memory", &o.keyframe_memory, 1, 1000000,
              "with loop closure: MB of kept keyframe images in memory (for re-fusion); beyond "
-             "it keyframes are let go evenly over time, and when every viewpoint kept is unique "
-             "the oldest move to a scratch file on disk (in TMPDIR, else /tmp)"),
+             "it a view another kept keyframe shares is let go, and the oldest unique ones move "
+             "to a scratch file on disk (in TMPDIR, else /tmp)"),
+      number("loop.region_share", &o.region_share, 0, 1,
+             "with loop closure: a pass fuses again only the region the loop moved, from the "
+             "kept keyframes that see it, when they are at most this share of the kept ones; "
+             "else the whole map (0: always the whole map)"),
   };
 }
 

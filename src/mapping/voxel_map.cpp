@@ -129,22 +129,46 @@ std::size_t VoxelMap::pruneAwayFromSurfaces(std::uint64_t idle, float clearance)
       });
     };
     if (!all_beyond(1.0f) && !all_beyond(-1.0f)) continue;
-    std::uint64_t key;
-    packKey(coordinates_[i], key);
-    block_index_.erase(key);
-    points_ -= b.surface_points;
-    b.surface_points = 0;
-    b.in_use = false;
-    for (int n = 0; n < 6; ++n) {
-      if (b.neighbours[n] != kNone) blocks_[b.neighbours[n]].neighbours[n ^ 1] = kNone;
-      b.neighbours[n] = kNone;
-    }
-    coordinates_[i] = kNoBlock;
-    free_.push_back(i);
+    release(i);
     ++freed;
   }
   // Freed blocks may still be listed for counting: they count nothing now.
   return freed;
+}
+
+void VoxelMap::release(std::uint32_t i) {
+  Block& b = blocks_[i];
+  std::uint64_t key;
+  packKey(coordinates_[i], key);
+  block_index_.erase(key);
+  points_ -= b.surface_points;
+  b.surface_points = 0;
+  b.in_use = false;
+  for (int n = 0; n < 6; ++n) {
+    if (b.neighbours[n] != kNone) blocks_[b.neighbours[n]].neighbours[n ^ 1] = kNone;
+    b.neighbours[n] = kNone;
+  }
+  coordinates_[i] = kNoBlock;
+  free_.push_back(i);
+}
+
+void VoxelMap::replaceRegion(const VoxelMap& from,
+                             const std::function<bool(const Eigen::Vector3i&)>& in) {
+  beginIntegration();
+  for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
+    if (!blocks_[i].in_use || !in(coordinates_[i])) continue;
+    // Its neighbours outside the region lose the voxels they compared theirs with: counted again.
+    for (const std::uint32_t n : blocks_[i].neighbours)
+      if (n != kNone && !in(coordinates_[n])) touchExisting(n);
+    release(i);
+  }
+  for (std::uint32_t j = 0; j < from.blocks_.size(); ++j) {
+    const Block& b = from.blocks_[j];
+    if (!b.in_use || !in(from.coordinates_[j])) continue;
+    const std::uint32_t index = touchBlock(from.coordinates_[j]);
+    if (index != kNone) blocks_[index].voxels = b.voxels;
+  }
+  finishIntegration();
 }
 
 VoxelMap::Neighbours VoxelMap::neighboursOf(const Block& block) const {

@@ -64,9 +64,10 @@ struct RunStats {
   std::atomic<std::uint64_t> loops_accepted{0};
   std::atomic<std::uint64_t> loops_rejected{0};
   std::atomic<std::uint64_t> loop_keyframes_unsearched{0};
-  // With loop closure: times the map was fused again from the kept keyframes to follow a loop,
-  // and keyframes fused again in all.
+  // With loop closure: times the map was fused again from the kept keyframes to follow a loop
+  // (of which region passes: only where the loop moved it), and keyframes fused again in all.
   std::atomic<std::uint64_t> map_refusions{0};
+  std::atomic<std::uint64_t> region_refusions{0};
   std::atomic<std::uint64_t> keyframes_refused{0};
   bool loop_closure = false;  // the run closes loops (set before the threads start)
   bool localising = false;    // the run localises in a saved map (set before the threads start)

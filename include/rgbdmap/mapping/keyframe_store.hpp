@@ -9,6 +9,7 @@
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/base/png_decoder.hpp"
 #include "rgbdmap/base/png_encoder.hpp"
+#include "rgbdmap/mapping/keyframe_footprint.hpp"
 #include "rgbdmap/mapping/spill_file.hpp"
 
 namespace rgbdmap {
@@ -25,19 +26,19 @@ double viewpointDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b)
 //
 // Memory is bounded: every keyframe's images are kept in memory while they fit in
 // `budget_bytes`. Beyond it, one keyframe at a time gives up its place: among those whose
-// viewpoint another kept keyframe shares (within 0.3 m, a turn counting 2 m per radian; poses as
-// corrected when they were fused), the one whose neighbours in time are nearest each other is let
-// go; when every viewpoint in memory is unique, the oldest one's images move to a scratch file on
-// disk (SpillFile), from which a pass reads them back (before, the older of the two nearest was
-// let go, and what only it saw left the map at the next pass). So a short run keeps every keyframe
-// in memory (its map re-fuses exactly); a long one keeps keyframes spread evenly over the time
-// spent, and a camera at rest or walking laps round a room thins what it has seen again and
-// again. A viewpoint shared within 0.3 m does not see all the other sees: thinning a large space
-// walked once still loses surface at a pass (docs/loop-closure.md). Should the disk refuse, the
-// store says so once and lets the oldest unique views go.
+// viewpoint another kept keyframe shares (one of another visit within 0.3 m, a turn counting 2 m
+// per radian, or one of the same visit within 3 cm; poses as corrected when they were fused), the
+// one whose neighbours in time are nearest each other is let go; when every viewpoint in memory
+// is unique, the oldest one's images move to a scratch file on disk (SpillFile), from which a
+// pass reads them back. So a short run keeps every keyframe in memory (its map re-fuses exactly);
+// a space walked once keeps every view (on disk beyond the budget), and a camera at rest or
+// walking laps round a room thins what it has seen again and again. (Thinning views 0.3 m apart
+// within one visit lost two thirds of a large room's surface at a pass: docs/loop-closure.md.)
+// Should the disk refuse, the store says so once and lets the oldest unique views go.
 class KeyframeStore {
  public:
   struct Entry {
+    std::uint64_t id = 0;  // the store's own, unique in it (indices shift as keyframes go)
     double timestamp = 0.0;
     std::uint64_t index = 0;
     std::int64_t anchor = -1;
@@ -46,7 +47,9 @@ class KeyframeStore {
     // Shared and never changed once encoded: a session saved with a checkpoint holds them
     // without copying (tens of MB).
     std::shared_ptr<const std::vector<std::uint8_t>> depth_png, colour_png;
-    double nearest = 0.0;  // viewpoint distance to the nearest other kept keyframe
+    KeyframeFootprint footprint;  // at fused_at (the Mapper's)
+    double travelled = 0.0;       // viewpoint distance along the kept keyframes from the first
+    double nearest = 0.0;         // sharedDistance() to the nearest other kept keyframe
     // On disk: the images are in the store's SpillFile (depth at disk_offset, colour after it),
     // depth_png and colour_png are empty.
     bool on_disk = false;
@@ -72,6 +75,8 @@ class KeyframeStore {
   // before the keyframes kept so far, then fits the budget as add() does.
   void adopt(std::vector<Entry> earlier);
   std::size_t size() const { return entries_.size(); }
+  // The index of the entry with this id; size() when it was let go.
+  std::size_t find(std::uint64_t id) const;
   Entry& operator[](std::size_t i) { return entries_[i]; }
   const Entry& operator[](std::size_t i) const { return entries_[i]; }
   // The stored images back into `frame` (depth in metres, colour BGR), with the entry's
@@ -94,9 +99,11 @@ class KeyframeStore {
   // compresses 40% better).
   static constexpr double kInverseDepthUnits = 1300.0;
   static constexpr int kColourBitsDropped = 2;
-  std::size_t memoryBytes() const { return bytes_ + entries_.capacity() * sizeof(Entry); }
+  std::size_t memoryBytes() const;
 
  private:
+  // Viewpoint distance, scaled up within one visit (see keyframe_store.cpp).
+  static double sharedDistance(const Entry& a, const Entry& b);
   void findNearest(std::size_t i);
   std::vector<std::size_t> fitBudget();
   std::size_t mostRedundant() const;
@@ -108,6 +115,7 @@ class KeyframeStore {
   std::size_t budget_bytes_;
   std::vector<Entry> entries_;
   std::size_t bytes_ = 0;  // images in memory
+  std::uint64_t next_id_ = 0;
   SpillFile spill_;
   std::size_t on_disk_ = 0;
   bool disk_refused_ = false;

@@ -25,9 +25,14 @@ struct RefusionOptions {
   // time the fusion thread is idle), so that a replay's fusion and a live camera's tracking keep
   // their pace.
   int refusion_pace = 2;
-  // Kept keyframes' images take at most this much memory; beyond it keyframes are let go evenly
-  // over time, a viewpoint seen once last (KeyframeStore).
+  // Kept keyframes' images take at most this much memory; beyond it views shared with another
+  // kept keyframe are let go, and the oldest unique ones move to disk (KeyframeStore).
   double keyframe_memory = 64.0;  // MB
+  // A pass fuses again only the cells the keyframes a loop moved see (KeyframeFootprint), from
+  // the kept keyframes that see them, when those are at most this share of the kept keyframes;
+  // beyond it the whole map, which holds one TSDF where a region pass holds a second for its
+  // region.
+  double region_share = 0.5;
 };
 
 Keys mapKeys(MapOptions& o);

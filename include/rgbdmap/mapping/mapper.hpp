@@ -8,6 +8,7 @@
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
+#include "rgbdmap/mapping/keyframe_footprint.hpp"
 #include "rgbdmap/mapping/keyframe_integrator.hpp"
 #include "rgbdmap/mapping/keyframe_store.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
@@ -28,10 +29,18 @@ namespace rgbdmap {
 // When a loop moves kept keyframes by more than refusion_shift, the map is fused again from the
 // kept keyframes at their corrected poses, a few keyframes at a time between new ones (refine()).
 // So the map written is what fusing the keyframes at the poses known then gives: one surface per
-// wall, not one per visit. While a pass runs, what is shown and written is the map as it was when
-// the pass began, kept as its point cloud (and mesh): the TSDF it came from is emptied and the pass
-// fuses into its memory, so a pass never holds two TSDFs (nor hands 100 MB back to the system to
-// fault it in again), and keyframes that arrive meanwhile are fused once, by the pass.
+// wall, not one per visit. A pass is one of two kinds:
+// - a region pass, when the keyframes that see what the loop moved are at most
+//   refusion.region_share of those kept: the cells the moved keyframes see, before and after the
+//   move (KeyframeFootprint), are fused again from those keyframes into a TSDF of their own,
+//   which then replaces the map's blocks in those cells. The map stays as it is meanwhile (and
+//   new keyframes are fused into it, and into the region's when they see it). Its work grows with
+//   what the loop moved, not with the map;
+// - a whole pass otherwise (a loop that moved most of the map, or a saved map joined): what is
+//   shown and written is the map as it was when the pass began, kept as its point cloud (and
+//   mesh): the TSDF it came from is emptied and the pass fuses into its memory, so a pass never
+//   holds two TSDFs of the whole map (nor hands 100 MB back to the system to fault it in again),
+//   and keyframes that arrive meanwhile are fused once, by the pass.
 class Mapper {
  public:
   // `keyframe_trajectory` (may be null: then the Mapper keeps it, see keyframeTrajectory()) is
@@ -95,6 +104,15 @@ class Mapper {
   // Takes in the saved keyframes once the run has joined their frame; returns whether it did.
   bool joinSaved(const PoseCorrections::Snapshot& correction);
   bool refusing() const { return shown_ != nullptr; }
+  // Starts a region pass if the keyframes to fuse again are few enough; returns whether it did.
+  bool beginRegionPass(const PoseCorrections::Snapshot& correction);
+  void beginWholePass();
+  // Fuses up to `keyframes` of the region pass's into its TSDF; at the end, into the map.
+  void refineRegion(int keyframes);
+  // Fuses up to `keyframes` kept keyframes into the emptied map; at the end, shows it again.
+  void refineWhole(int keyframes);
+  // Where a keyframe's surfaces lie, seen from `pose`.
+  KeyframeFootprint footprintOf(const Frame& keyframe, const Eigen::Isometry3d& pose) const;
   void integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map);
   void noteUp(const Frame& keyframe, const Eigen::Isometry3d& pose);
 
@@ -111,6 +129,23 @@ class Mapper {
   std::shared_ptr<const TriangleMesh> shown_mesh_;
   bool keep_meshes_ = false;
   std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> refused_at_;
+  // A region pass under way: the cells it fuses again (sorted), the cells whose keyframes it
+  // fuses (those and their neighbours), the kept keyframes' ids in store order and, for those
+  // fused so far, the pose and footprint they were fused at.
+  struct RegionPass {
+    RegionPass(double voxel_size, std::uint32_t min_observations)
+        : map(voxel_size, min_observations) {}
+    std::vector<std::uint64_t> cells, reach;
+    std::vector<std::uint64_t> keyframes;
+    std::vector<bool> moved;  // by the loop (else only seeing what it moved)
+    std::vector<std::pair<Eigen::Isometry3d, KeyframeFootprint>,
+                Eigen::aligned_allocator<std::pair<Eigen::Isometry3d, KeyframeFootprint>>>
+        fused;
+    VoxelMap map;
+  };
+  std::unique_ptr<RegionPass> region_;
+  std::vector<KeyframeFootprint> refused_footprints_;  // whole pass: beside refused_at_
+  FilterOptions filter_;
   std::uint64_t checked_version_ = 0;        // corrections compared with the kept keyframes
   std::vector<KeyframeStore::Entry> saved_;  // continuing: until the run joins their frame
   bool awaiting_join_ = false;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "rgbdmap/base/chunked_vector.hpp"
@@ -127,6 +128,10 @@ class VoxelMap {
   // distant view's band reached (no zero crossing is in or next to them); a later view that
   // measures near them allocates them again. Returns how many were freed.
   std::size_t pruneAwayFromSurfaces(std::uint64_t idle, float clearance);
+  // Takes `from`'s blocks (a map of the same voxel size) where `in(block coordinates)` holds, in
+  // place of this map's there, which go where `from` has none: the end of a pass that fused one
+  // region again (Mapper).
+  void replaceRegion(const VoxelMap& from, const std::function<bool(const Eigen::Vector3i&)>& in);
   // Empty again (as a new map), keeping the blocks' memory for the blocks fused next: a re-fusion
   // pass (Mapper) starts from an empty map and grows back to about the size it had.
   void clear();
@@ -144,6 +149,8 @@ class VoxelMap {
   static Eigen::Vector3i unpack(std::uint64_t key);
 
  private:
+  // Frees a block's slot for a new one.
+  void release(std::uint32_t index);
   // The 6 face neighbours of a block (-x, +x, -y, +y, -z, +z), nullptr where none.
   using Neighbours = std::array<const Block*, 6>;
   Neighbours neighboursOf(const Block& block) const;
