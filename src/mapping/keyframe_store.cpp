@@ -85,7 +85,7 @@ bool KeyframeStore::moveToDisk(std::size_t i) {
   if (disk_refused_) return false;
   Entry& e = entries_[i];
   std::string error;
-  if (!spill_.append(*e.depth_png, *e.colour_png, e.disk_offset, error)) {
+  if (!spill_->append(*e.depth_png, *e.colour_png, e.disk_offset, error)) {
     spdlog::warn(
         "{}: keyframes beyond loop.keyframe_memory are let go from now on, and a pass after a "
         "loop will leave out what only they saw",
@@ -99,6 +99,7 @@ bool KeyframeStore::moveToDisk(std::size_t i) {
   e.depth_png.reset();
   e.colour_png.reset();
   e.on_disk = true;
+  e.disk = spill_;
   ++on_disk_;
   return true;
 }
@@ -202,34 +203,38 @@ std::size_t KeyframeStore::memoryBytes() const {
   return bytes_ + footprints + entries_.capacity() * sizeof(Entry);
 }
 
-std::vector<KeyframeStore::Entry> KeyframeStore::entries() const {
-  std::vector<Entry> in_memory;
-  in_memory.reserve(entries_.size() - on_disk_);
-  for (const Entry& e : entries_)
-    if (!e.on_disk) in_memory.push_back(e);
-  return in_memory;
+std::vector<KeyframeStore::Entry> KeyframeStore::entries() const { return entries_; }
+
+namespace {
+
+std::shared_ptr<const std::vector<std::uint8_t>> readBack(const SpillFile& disk,
+                                                          std::uint64_t offset, std::size_t size) {
+  std::vector<std::uint8_t> bytes;
+  std::string error;
+  if (!disk.read(offset, size, bytes, error)) throw std::runtime_error(error);
+  return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
 }
 
-void KeyframeStore::decode(std::size_t i, Frame& frame) {
-  const Entry& e = entries_.at(i);
-  if (!e.on_disk) return decode(e, frame);
-  std::vector<std::uint8_t> depth, colour;
-  std::string error;
-  if (!spill_.read(e.disk_offset, e.depth_bytes, depth, error) ||
-      !spill_.read(e.disk_offset + e.depth_bytes, e.colour_bytes, colour, error))
-    throw std::runtime_error(error);
-  Entry loaded = e;
-  loaded.depth_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(depth));
-  loaded.colour_png = std::make_shared<const std::vector<std::uint8_t>>(std::move(colour));
-  decode(loaded, frame);
+}  // namespace
+
+std::shared_ptr<const std::vector<std::uint8_t>> KeyframeStore::Entry::depthImage() const {
+  return on_disk ? readBack(*disk, disk_offset, depth_bytes) : depth_png;
 }
+
+std::shared_ptr<const std::vector<std::uint8_t>> KeyframeStore::Entry::colourImage() const {
+  return on_disk ? readBack(*disk, disk_offset + depth_bytes, colour_bytes) : colour_png;
+}
+
+void KeyframeStore::decode(std::size_t i, Frame& frame) { decode(entries_.at(i), frame); }
 
 void KeyframeStore::decode(const Entry& e, Frame& frame) {
   std::string error;
-  if (decoder_.decode(e.depth_png->data(), e.depth_png->size(), PngDecoder::Mode::kDepth, units_,
-                      error) != PngDecoder::Status::kDecoded ||
-      decoder_.decode(e.colour_png->data(), e.colour_png->size(), PngDecoder::Mode::kColor, half_,
-                      error) != PngDecoder::Status::kDecoded)
+  const auto depth = e.depthImage();
+  const auto colour = e.colourImage();
+  if (decoder_.decode(depth->data(), depth->size(), PngDecoder::Mode::kDepth, units_, error) !=
+          PngDecoder::Status::kDecoded ||
+      decoder_.decode(colour->data(), colour->size(), PngDecoder::Mode::kColor, half_, error) !=
+          PngDecoder::Status::kDecoded)
     throw std::runtime_error("a kept keyframe's images could not be decoded: " + error);
   units_.convertTo(inverse_, CV_32F);
   cv::divide(kInverseDepthUnits, inverse_, frame.depth, CV_32F);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "rgbdmap/mapping/mesh_extractor.hpp"
 
@@ -21,6 +22,10 @@ constexpr std::chrono::milliseconds kCountPointsEvery{1000};
 constexpr std::uint64_t kPruneEvery = 10;
 constexpr std::uint64_t kPruneIdleKeyframes = 30;
 constexpr float kPruneClearanceVoxels = 2.0f;
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 // Whether two sorted lists share an element.
 bool intersects(const std::vector<std::uint64_t>& a, const std::vector<std::uint64_t>& b) {
@@ -158,6 +163,11 @@ bool Mapper::lagsCorrections(const PoseCorrections::Snapshot& correction) {
   return false;
 }
 
+double Mapper::regionVolume(std::size_t cells) const {
+  const double edge = voxel_size_ * VoxelMap::kBlockEdge * KeyframeFootprint::kCellBlocks;
+  return std::round(static_cast<double>(cells) * edge * edge * edge);
+}
+
 KeyframeFootprint Mapper::footprintOf(const Frame& keyframe, const Eigen::Isometry3d& pose) const {
   return KeyframeFootprint(keyframe.depth, camera_, pose, voxel_size_, filter_.min_depth,
                            filter_.max_depth);
@@ -171,6 +181,7 @@ bool Mapper::refine(int keyframes) {
     const bool joined = joinSaved(latest);
     if (!joined && !lagsCorrections(latest)) return false;
     if (joined || !beginRegionPass(latest)) beginWholePass();
+    pass_began_ = std::chrono::steady_clock::now();
   }
   const auto start = std::chrono::steady_clock::now();
   if (region_)
@@ -253,6 +264,10 @@ void Mapper::refineRegion(int keyframes) {
     store_[i].fused_at = pass.fused[k].first;
     store_[i].footprint = std::move(pass.fused[k].second);
   }
+  spdlog::info(
+      "the map follows a loop: {} of {} kept keyframes fused again where it moved ({} m^3) "
+      "in {:.1f} s",
+      pass.keyframes.size(), store_.size(), regionVolume(cells.size()), secondsSince(pass_began_));
   region_.reset();
   stats_.region_refusions.fetch_add(1);
   stats_.map_refusions.fetch_add(1);
@@ -288,6 +303,8 @@ void Mapper::refineWhole(int keyframes) {
     stats_.keyframes_refused.fetch_add(1);
   }
   if (refused_at_.size() < store_.size()) return;
+  spdlog::info("the map follows a loop: all {} kept keyframes fused again in {:.1f} s",
+               store_.size(), secondsSince(pass_began_));
   // Caught up: the map is every kept keyframe at its corrected pose (those in memory and those
   // on disk; the ones let go saw what a kept one sees), and is shown again.
   shown_.reset();
@@ -304,7 +321,8 @@ void Mapper::refineWhole(int keyframes) {
 
 void Mapper::settle() {
   if (!corrections_) return;
-  const std::size_t pending = store_.size() - (refusing() ? refused_at_.size() : 0);
+  const std::size_t pending = region_ ? region_->keyframes.size() - region_->fused.size()
+                                      : store_.size() - (refusing() ? refused_at_.size() : 0);
   bool logged = false;
   while (refine(16)) {
     if (!logged) {

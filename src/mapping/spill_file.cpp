@@ -49,22 +49,24 @@ bool SpillFile::open(std::string& error) {
 bool SpillFile::append(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b,
                        std::uint64_t& offset, std::string& error) {
   if (fd_ < 0 && !open(error)) return false;
-  if (!whole(::pwrite, fd_, a.data(), a.size(), end_) ||
-      !whole(::pwrite, fd_, b.data(), b.size(), end_ + a.size())) {
+  const std::uint64_t end = end_.load();
+  if (!whole(::pwrite, fd_, a.data(), a.size(), end) ||
+      !whole(::pwrite, fd_, b.data(), b.size(), end + a.size())) {
     error = folder_ + ": cannot write keyframe images: " + std::strerror(errno);
     return false;
   }
-  offset = end_;
-  end_ += a.size() + b.size();
+  offset = end;
+  end_.store(end + a.size() + b.size());
   return true;
 }
 
 bool SpillFile::read(std::uint64_t offset, std::size_t size, std::vector<std::uint8_t>& out,
                      std::string& error) const {
   out.resize(size);
-  if (fd_ < 0 || offset + size > end_ || !whole(::pread, fd_, out.data(), size, offset)) {
+  const bool written = fd_ >= 0 && offset + size <= end_.load();
+  if (!written || !whole(::pread, fd_, out.data(), size, offset)) {
     error = folder_ + ": cannot read keyframe images back: " +
-            (fd_ < 0 || offset + size > end_ ? "not written" : std::strerror(errno));
+            (!written ? "not written" : std::strerror(errno));
     return false;
   }
   return true;

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
@@ -162,8 +163,8 @@ void writeKeyframes(const Session& s, RecordWriter& out, SessionSummary& summary
     out.put<std::int64_t>(e.anchor);
     putPose(out, e.pose);
     putPose(out, e.fused_at);
-    putBlob(out, e.depth_png);
-    putBlob(out, e.colour_png);
+    putBlob(out, e.depthImage());  // read back from disk for the time of writing it
+    putBlob(out, e.colourImage());
   }
 }
 
@@ -287,14 +288,23 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   // Each record streamed to its file (the kept keyframes' images are tens of MB: never copied).
   const auto record = [&](const char* name, const char(&kind)[5],
                           void (*write)(const Session&, RecordWriter&, SessionSummary&)) {
-    return writeFileAtomically(
+    // A kept keyframe's images read back from disk may fail (the scratch file's disk gone).
+    std::string unreadable;
+    const bool written = writeFileAtomically(
         in(name),
         [&](int fd) {
-          RecordWriter out(fd, kind, Session::kFormatVersion);
-          write(session, out, summary);
-          return out.finish();
+          try {
+            RecordWriter out(fd, kind, Session::kFormatVersion);
+            write(session, out, summary);
+            return out.finish();
+          } catch (const std::runtime_error& e) {
+            unreadable = e.what();
+            return false;
+          }
         },
         error);
+    if (!unreadable.empty()) error = in(name) + ": " + unreadable;
+    return written;
   };
   const bool written =
       record(kGraphFile, kGraphKind, writeGraph) && record(kPlacesFile, kPlacesKind, writePlaces) &&

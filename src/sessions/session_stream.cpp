@@ -103,8 +103,8 @@ std::string pieceRecord(std::uint64_t run, const KeyframeStore::Entry& e) {
   out.put(e.timestamp);
   out.put<std::int64_t>(e.anchor);
   putPose(out, e.pose);
-  putImage(out, *e.depth_png);
-  putImage(out, *e.colour_png);
+  putImage(out, *e.depthImage());
+  putImage(out, *e.colourImage());
   out.finish();
   return bytes;
 }

@@ -53,8 +53,13 @@ class KeyframeStore {
     // On disk: the images are in the store's SpillFile (depth at disk_offset, colour after it),
     // depth_png and colour_png are empty.
     bool on_disk = false;
+    std::shared_ptr<const SpillFile> disk;  // the file, kept open for whoever holds the entry
     std::uint64_t disk_offset = 0;
     std::size_t depth_bytes = 0, colour_bytes = 0;
+    // The images (PNG), read back from disk when they are there; throw std::runtime_error, naming
+    // the file's folder, when that fails.
+    std::shared_ptr<const std::vector<std::uint8_t>> depthImage() const;
+    std::shared_ptr<const std::vector<std::uint8_t>> colourImage() const;
     // The images' bytes in memory.
     std::size_t imageBytes() const {
       return (depth_png ? depth_png->size() : 0) + (colour_png ? colour_png->size() : 0);
@@ -84,12 +89,12 @@ class KeyframeStore {
   void decode(std::size_t i, Frame& frame);
   // The same for an entry of another store (a saved session's: its images in memory).
   void decode(const Entry& entry, Frame& frame);
-  // The kept keyframes whose images are in memory, as they are now (the images shared, not
-  // copied): what a session saves. Those on disk are this run's alone.
+  // The kept keyframes as they are now (images in memory shared, not copied; those on disk read
+  // by whoever writes them, depthImage()): what a session saves.
   std::vector<Entry> entries() const;
   // Kept keyframes whose images are on disk, and the bytes the disk holds for them.
   std::size_t onDisk() const { return on_disk_; }
-  std::uint64_t diskBytes() const { return spill_.bytes(); }
+  std::uint64_t diskBytes() const { return spill_->bytes(); }
   // How the images are stored (a session records them). Depth: a 16-bit PNG of K / depth
   // (inverse depth, as the Kinect measures it, in steps of 1 / K per metre): a step is
   // depth^2 / K, at most half the noise sigma (kinectDepthSigma) from 0.4 to 5 m, so the
@@ -116,7 +121,7 @@ class KeyframeStore {
   std::vector<Entry> entries_;
   std::size_t bytes_ = 0;  // images in memory
   std::uint64_t next_id_ = 0;
-  SpillFile spill_;
+  std::shared_ptr<SpillFile> spill_ = std::make_shared<SpillFile>();
   std::size_t on_disk_ = 0;
   bool disk_refused_ = false;
   PngEncoder encoder_;

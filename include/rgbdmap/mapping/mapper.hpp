@@ -111,6 +111,8 @@ class Mapper {
   void refineRegion(int keyframes);
   // Fuses up to `keyframes` kept keyframes into the emptied map; at the end, shows it again.
   void refineWhole(int keyframes);
+  // The volume of that many footprint cells (m^3, rounded).
+  double regionVolume(std::size_t cells) const;
   // Where a keyframe's surfaces lie, seen from `pose`.
   KeyframeFootprint footprintOf(const Frame& keyframe, const Eigen::Isometry3d& pose) const;
   void integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, VoxelMap& map);
@@ -144,6 +146,7 @@ class Mapper {
     VoxelMap map;
   };
   std::unique_ptr<RegionPass> region_;
+  std::chrono::steady_clock::time_point pass_began_;
   std::vector<KeyframeFootprint> refused_footprints_;  // whole pass: beside refused_at_
   FilterOptions filter_;
   std::uint64_t checked_version_ = 0;        // corrections compared with the kept keyframes

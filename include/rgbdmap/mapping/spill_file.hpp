@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -21,18 +22,19 @@ class SpillFile {
   // the folder and what went wrong, when the file cannot be made or written (the disk full).
   bool append(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b,
               std::uint64_t& offset, std::string& error);
-  // Reads `size` bytes at `offset` into `out`; false, with `error`, when that fails.
+  // Reads `size` bytes at `offset` into `out`; false, with `error`, when that fails. Any thread
+  // may read what was appended before it got the offset (a session written on its own thread).
   bool read(std::uint64_t offset, std::size_t size, std::vector<std::uint8_t>& out,
             std::string& error) const;
   // Bytes written so far.
-  std::uint64_t bytes() const { return end_; }
+  std::uint64_t bytes() const { return end_.load(); }
 
  private:
   bool open(std::string& error);
 
   int fd_ = -1;
   std::string folder_;
-  std::uint64_t end_ = 0;
+  std::atomic<std::uint64_t> end_{0};
 };
 
 }  // namespace rgbdmap
