@@ -218,6 +218,13 @@ bool Mapper::beginRegionPass(const PoseCorrections::Snapshot& correction) {
   if (static_cast<double>(pass->keyframes.size()) >
       refusion_.region_share * static_cast<double>(store_.size()))
     return false;
+  // Its TSDF keeps the region and what borders it: the rest of what its keyframes see is
+  // neither needed nor taken.
+  const std::vector<std::uint64_t>* reach = &pass->reach;
+  pass->map.limitTo([reach](const Eigen::Vector3i& block) {
+    return std::binary_search(reach->begin(), reach->end(),
+                              KeyframeFootprint::key(KeyframeFootprint::cellOf(block)));
+  });
   region_ = std::move(pass);
   return true;
 }

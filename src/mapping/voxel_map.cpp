@@ -66,6 +66,8 @@ std::uint32_t VoxelMap::touchBlock(const Eigen::Vector3i& block_coords) {
   if (!packKey(block_coords, key)) return UINT32_MAX;
   const std::uint32_t slot =
       free_.empty() ? static_cast<std::uint32_t>(blocks_.size()) : free_.back();
+  if (allowed_ && block_index_.find(key) == block_index_.end() && !allowed_(block_coords))
+    return UINT32_MAX;
   const auto [it, inserted] = block_index_.try_emplace(key, slot);
   if (inserted) {
     if (free_.empty()) {

@@ -113,7 +113,7 @@ class VoxelMap {
   void beginIntegration() { ++integration_; }
   std::uint64_t integrations() const { return integration_; }
   // The block with these block coordinates, created if new, added to the working set; returns
-  // its index, or UINT32_MAX outside the key range.
+  // its index, or UINT32_MAX outside the key range or where limitTo() allows none.
   std::uint32_t touchBlock(const Eigen::Vector3i& block_coords);
   const std::vector<std::uint32_t>& touchedBlocks() const { return touched_; }
   // Adds an existing block to the working set (one that free space seen through may update).
@@ -128,6 +128,11 @@ class VoxelMap {
   // distant view's band reached (no zero crossing is in or next to them); a later view that
   // measures near them allocates them again. Returns how many were freed.
   std::size_t pruneAwayFromSurfaces(std::uint64_t idle, float clearance);
+  // New blocks only where `allowed(block coordinates)` holds: a pass that fuses one region again
+  // (Mapper) keeps no more than the region and what borders it.
+  void limitTo(std::function<bool(const Eigen::Vector3i&)> allowed) {
+    allowed_ = std::move(allowed);
+  }
   // Takes `from`'s blocks (a map of the same voxel size) where `in(block coordinates)` holds, in
   // place of this map's there, which go where `from` has none: the end of a pass that fused one
   // region again (Mapper).
@@ -178,7 +183,8 @@ class VoxelMap {
   std::vector<Eigen::Vector3i> coordinates_;  // block coordinates by index (kNoBlock: free)
   std::vector<std::uint32_t> free_;           // pruned slots, reused first
   std::vector<std::uint32_t> touched_;
-  std::vector<std::uint32_t> count_due_;  // blocks with count_due set
+  std::vector<std::uint32_t> count_due_;                 // blocks with count_due set
+  std::function<bool(const Eigen::Vector3i&)> allowed_;  // limitTo()
 };
 
 }  // namespace rgbdmap
