@@ -97,6 +97,34 @@ TEST(Continuation, ASavedMapNeverRecognisedLeavesTheRunsOwnMap) {
               test::precisionOf(dir + "/alone.pcd", orbit, dir + "/alone_keyframes.txt"), 0.005);
 }
 
+// Kept keyframes beyond their memory budget go to a scratch file, and a checkpoint's session,
+// written on its own thread while fusion goes on appending to that file, reads them back: the
+// session holds every kept keyframe, those on disk too, and reads back whole.
+TEST(Continuation, ASessionHoldsTheKeptKeyframesThatWentToDisk) {
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+                          "/map.pcd --rate max --no-render --viewer none --set "
+                          "pose.source=odometry --set loop.keyframe_memory=1 --set "
+                          "checkpoint.every_keyframes=1 --set checkpoint.min_seconds=0 --stats " +
+                          dir + "/map.json",
+                      &output),
+            0)
+      << output;
+  const std::string stats = test::readFile(dir + "/map.json");
+  const double on_disk = test::jsonNumber(stats, "kept_keyframes_on_disk");
+  EXPECT_GT(on_disk, 5) << stats;
+  EXPECT_GE(test::countOccurrences(output, "session: "), 3u) << output;
+  const Session session = readSession(dir + "/map.session");
+  EXPECT_GT(static_cast<double>(session.keyframes.size()), on_disk) << stats;
+  for (const KeyframeStore::Entry& e : session.keyframes) {
+    ASSERT_TRUE(e.depth_png && e.colour_png);
+    EXPECT_GT(e.depth_png->size(), 1000u);
+    EXPECT_GT(e.colour_png->size(), 1000u);
+  }
+  EXPECT_EQ(test::run(test::binary() + " session " + dir + "/map.session", &output), 0) << output;
+}
+
 TEST(Continuation, RefusesWhatCannotGoOnFromASession) {
   const std::string dir = test::freshDir();
   test::mapTo(test::tumDir(kXyz), dir + "/map.pcd");
