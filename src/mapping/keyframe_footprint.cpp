@@ -8,30 +8,27 @@
 namespace rgbdmap {
 namespace {
 
-constexpr int kBits = 21;
-constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);
-constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
-
 double cellSize(double voxel_size) {
   return voxel_size * VoxelMap::kBlockEdge * KeyframeFootprint::kCellBlocks;
+}
+
+// The key of the cell a point lies in (in cell units); false far beyond any map (or NaN), and
+// within a cell of the key range's edge, so that the cells next to it have keys too.
+bool cellIn(const Eigen::Vector3d& p, std::uint64_t& key) {
+  constexpr double kLimit = (1 << 20) - 2;
+  if (!(p.array().abs() < kLimit).all()) return false;
+  return VoxelMap::pack(p.array().floor().cast<int>().matrix(), key);
 }
 
 }  // namespace
 
 std::uint64_t KeyframeFootprint::key(const Eigen::Vector3i& cell) {
   std::uint64_t key = 0;
-  for (int axis = 0; axis < 3; ++axis)
-    key |= (static_cast<std::uint64_t>(cell[axis] + kOffset) & kMask) << (kBits * axis);
+  VoxelMap::pack(cell, key);  // cells are within range (cellIn())
   return key;
 }
 
-Eigen::Vector3i KeyframeFootprint::unpack(std::uint64_t key) {
-  Eigen::Vector3i cell;
-  for (int axis = 0; axis < 3; ++axis)
-    cell[axis] =
-        static_cast<int>(static_cast<std::int64_t>((key >> (kBits * axis)) & kMask) - kOffset);
-  return cell;
-}
+Eigen::Vector3i KeyframeFootprint::unpack(std::uint64_t key) { return VoxelMap::unpack(key); }
 
 KeyframeFootprint::KeyframeFootprint(const cv::Mat& depth, const CameraIntrinsics& camera,
                                      const Eigen::Isometry3d& pose, double voxel_size,
@@ -46,9 +43,8 @@ KeyframeFootprint::KeyframeFootprint(const cv::Mat& depth, const CameraIntrinsic
       const Eigen::Vector3d p = rotation * Eigen::Vector3d((u - camera.cx) * z / camera.fx,
                                                            (v - camera.cy) * z / camera.fy, z) +
                                 pose.translation();
-      const Eigen::Vector3d c = (p / cell).array().floor();
-      if (!(c.array().abs() < static_cast<double>(kOffset - 1)).all()) continue;
-      cells_.push_back(key(c.cast<int>()));
+      std::uint64_t k;
+      if (cellIn(p / cell, k)) cells_.push_back(k);
     }
   }
   sortUnique();
@@ -65,11 +61,10 @@ KeyframeFootprint KeyframeFootprint::moved(const Eigen::Isometry3d& motion,
   const double cell = cellSize(voxel_size);
   KeyframeFootprint out;
   out.cells_.reserve(cells_.size());
-  for (const std::uint64_t k : cells_) {
-    const Eigen::Vector3d centre = (unpack(k).cast<double>().array() + 0.5).matrix() * cell;
-    const Eigen::Vector3d c = ((motion * centre) / cell).array().floor();
-    if (!(c.array().abs() < static_cast<double>(kOffset - 1)).all()) continue;
-    out.cells_.push_back(key(c.cast<int>()));
+  for (const std::uint64_t from : cells_) {
+    const Eigen::Vector3d centre = (unpack(from).cast<double>().array() + 0.5).matrix() * cell;
+    std::uint64_t to;
+    if (cellIn((motion * centre) / cell, to)) out.cells_.push_back(to);
   }
   out.sortUnique();
   return out;

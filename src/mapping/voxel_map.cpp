@@ -11,16 +11,6 @@ constexpr int kBits = 21;
 constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20, 2^20) to [0, 2^21)
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
-bool packKey(const Eigen::Vector3i& coords, std::uint64_t& key) {
-  key = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::int64_t shifted = static_cast<std::int64_t>(coords[axis]) + kOffset;
-    if (shifted < 0 || shifted >= 2 * kOffset) return false;
-    key |= static_cast<std::uint64_t>(shifted) << (kBits * axis);
-  }
-  return true;
-}
-
 // A surface voxel's point, for either point type (pcl::PointXYZRGB or PackedMapPoint).
 template <typename Point>
 Point surfacePoint(const Eigen::Vector3f& p, const VoxelMap::Voxel& v) {
@@ -50,7 +40,17 @@ bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
     }
     coords[axis] = static_cast<int>(scaled);
   }
-  return packKey(coords, key);
+  return pack(coords, key);
+}
+
+bool VoxelMap::pack(const Eigen::Vector3i& coords, std::uint64_t& key) {
+  key = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::int64_t shifted = static_cast<std::int64_t>(coords[axis]) + kOffset;
+    if (shifted < 0 || shifted >= 2 * kOffset) return false;
+    key |= static_cast<std::uint64_t>(shifted) << (kBits * axis);
+  }
+  return true;
 }
 
 Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
@@ -63,7 +63,7 @@ Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
 
 std::uint32_t VoxelMap::touchBlock(const Eigen::Vector3i& block_coords) {
   std::uint64_t key;
-  if (!packKey(block_coords, key)) return UINT32_MAX;
+  if (!pack(block_coords, key)) return UINT32_MAX;
   const std::uint32_t slot =
       free_.empty() ? static_cast<std::uint32_t>(blocks_.size()) : free_.back();
   if (allowed_ && block_index_.find(key) == block_index_.end() && !allowed_(block_coords))
@@ -91,7 +91,7 @@ void VoxelMap::link(std::uint32_t index, const Eigen::Vector3i& block_coords) {
       Eigen::Vector3i at = block_coords;
       at[axis] += side == 0 ? -1 : 1;
       std::uint64_t key;
-      if (!packKey(at, key)) continue;
+      if (!pack(at, key)) continue;
       const auto it = block_index_.find(key);
       if (it == block_index_.end()) continue;
       blocks_[index].neighbours[2 * axis + side] = it->second;
@@ -141,7 +141,7 @@ std::size_t VoxelMap::pruneAwayFromSurfaces(std::uint64_t idle, float clearance)
 void VoxelMap::release(std::uint32_t i) {
   Block& b = blocks_[i];
   std::uint64_t key;
-  packKey(coordinates_[i], key);
+  pack(coordinates_[i], key);
   block_index_.erase(key);
   points_ -= b.surface_points;
   b.surface_points = 0;

@@ -152,6 +152,9 @@ class VoxelMap {
   // false outside the key range.
   bool keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const;
   static Eigen::Vector3i unpack(std::uint64_t key);
+  // Integer coordinates (of a voxel, a block, or coarser cells) <-> a key: 21 bits an axis;
+  // false outside +-2^20.
+  static bool pack(const Eigen::Vector3i& coords, std::uint64_t& key);
 
  private:
   // Frees a block's slot for a new one.
