@@ -8,10 +8,6 @@
 namespace rgbdmap {
 namespace {
 
-double cellSize(double voxel_size) {
-  return voxel_size * VoxelMap::kBlockEdge * KeyframeFootprint::kCellBlocks;
-}
-
 // The key of the cell a point lies in (in cell units); false far beyond any map (or NaN), and
 // within a cell of the key range's edge, so that the cells next to it have keys too.
 bool cellIn(const Eigen::Vector3d& p, std::uint64_t& key) {
@@ -30,6 +26,21 @@ std::uint64_t KeyframeFootprint::key(const Eigen::Vector3i& cell) {
 
 Eigen::Vector3i KeyframeFootprint::unpack(std::uint64_t key) { return VoxelMap::unpack(key); }
 
+double KeyframeFootprint::cellSize(double voxel_size) {
+  return voxel_size * VoxelMap::kBlockEdge * kCellBlocks;
+}
+
+bool KeyframeFootprint::holds(const std::vector<std::uint64_t>& cells,
+                              const Eigen::Vector3i& block) {
+  const Eigen::Vector3i cell(floorDiv(block.x()), floorDiv(block.y()), floorDiv(block.z()));
+  return std::binary_search(cells.begin(), cells.end(), key(cell));
+}
+
+void KeyframeFootprint::sortUnique(std::vector<std::uint64_t>& cells) {
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+}
+
 KeyframeFootprint::KeyframeFootprint(const cv::Mat& depth, const CameraIntrinsics& camera,
                                      const Eigen::Isometry3d& pose, double voxel_size,
                                      double min_depth, double max_depth) {
@@ -47,12 +58,7 @@ KeyframeFootprint::KeyframeFootprint(const cv::Mat& depth, const CameraIntrinsic
       if (cellIn(p / cell, k)) cells_.push_back(k);
     }
   }
-  sortUnique();
-}
-
-void KeyframeFootprint::sortUnique() {
-  std::sort(cells_.begin(), cells_.end());
-  cells_.erase(std::unique(cells_.begin(), cells_.end()), cells_.end());
+  sortUnique(cells_);
   cells_.shrink_to_fit();
 }
 
@@ -66,7 +72,7 @@ KeyframeFootprint KeyframeFootprint::moved(const Eigen::Isometry3d& motion,
     std::uint64_t to;
     if (cellIn((motion * centre) / cell, to)) out.cells_.push_back(to);
   }
-  out.sortUnique();
+  sortUnique(out.cells_);
   return out;
 }
 
@@ -79,8 +85,7 @@ std::vector<std::uint64_t> KeyframeFootprint::dilate(const std::vector<std::uint
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) out.push_back(key(c + Eigen::Vector3i(dx, dy, dz)));
   }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  sortUnique(out);
   return out;
 }
 

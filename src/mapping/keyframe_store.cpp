@@ -121,8 +121,8 @@ std::vector<std::size_t> KeyframeStore::fitBudget() {
 }
 
 void KeyframeStore::letGo(std::size_t i) {
-  const Entry gone = entries_[i];
   bytes_ -= entries_[i].imageBytes();
+  const Entry gone = std::move(entries_[i]);
   entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(i));
   // Those whose nearest it may have been look again (the distance is not symmetric to the last
   // bit: a margin).

@@ -164,7 +164,7 @@ bool Mapper::lagsCorrections(const PoseCorrections::Snapshot& correction) {
 }
 
 double Mapper::regionVolume(std::size_t cells) const {
-  const double edge = voxel_size_ * VoxelMap::kBlockEdge * KeyframeFootprint::kCellBlocks;
+  const double edge = KeyframeFootprint::cellSize(voxel_size_);
   return std::round(static_cast<double>(cells) * edge * edge * edge);
 }
 
@@ -188,8 +188,7 @@ bool Mapper::refine(int keyframes) {
     refineRegion(keyframes);
   else
     refineWhole(keyframes);
-  stats_.refuse_latency.record(
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  stats_.refuse_latency.record(secondsSince(start));
   return true;
 }
 
@@ -207,8 +206,7 @@ bool Mapper::beginRegionPass(const PoseCorrections::Snapshot& correction) {
     pass->cells.insert(pass->cells.end(), before.begin(), before.end());
     pass->cells.insert(pass->cells.end(), after.cells().begin(), after.cells().end());
   }
-  std::sort(pass->cells.begin(), pass->cells.end());
-  pass->cells.erase(std::unique(pass->cells.begin(), pass->cells.end()), pass->cells.end());
+  KeyframeFootprint::sortUnique(pass->cells);
   pass->reach = KeyframeFootprint::dilate(pass->cells);
   for (std::size_t i = 0; i < store_.size(); ++i) {
     if (!moved[i] && !intersects(store_[i].footprint.cells(), pass->reach)) continue;
@@ -221,10 +219,8 @@ bool Mapper::beginRegionPass(const PoseCorrections::Snapshot& correction) {
   // Its TSDF keeps the region and what borders it: the rest of what its keyframes see is
   // neither needed nor taken.
   const std::vector<std::uint64_t>* reach = &pass->reach;
-  pass->map.limitTo([reach](const Eigen::Vector3i& block) {
-    return std::binary_search(reach->begin(), reach->end(),
-                              KeyframeFootprint::key(KeyframeFootprint::cellOf(block)));
-  });
+  pass->map.limitTo(
+      [reach](const Eigen::Vector3i& block) { return KeyframeFootprint::holds(*reach, block); });
   region_ = std::move(pass);
   return true;
 }
@@ -242,7 +238,9 @@ void Mapper::refineRegion(int keyframes) {
     store_.decode(i, decoded_);
     const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);
     integrate(decoded_, pose, pass.map);
-    pass.fused.emplace_back(pose, footprintOf(decoded_, pose));
+    // (Only the moved ones take their new pose and footprint at the end.)
+    pass.fused.emplace_back(
+        pose, pass.moved[pass.fused.size()] ? footprintOf(decoded_, pose) : KeyframeFootprint());
     stats_.keyframes_refused.fetch_add(1);
   }
   if (pass.fused.size() < pass.keyframes.size()) return;
@@ -255,11 +253,9 @@ void Mapper::refineRegion(int keyframes) {
     for (const std::uint64_t c : pass.fused[k].second.cells())
       if (std::binary_search(pass.reach.begin(), pass.reach.end(), c)) cells.push_back(c);
   }
-  std::sort(cells.begin(), cells.end());
-  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  KeyframeFootprint::sortUnique(cells);
   map_.replaceRegion(pass.map, [&](const Eigen::Vector3i& block) {
-    return std::binary_search(cells.begin(), cells.end(),
-                              KeyframeFootprint::key(KeyframeFootprint::cellOf(block)));
+    return KeyframeFootprint::holds(cells, block);
   });
   // The moved keyframes are in the map at their new poses, whole: every cell they saw before and
   // see now was fused again. The others only where they see the region: they stay at the poses

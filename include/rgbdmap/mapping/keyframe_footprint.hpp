@@ -25,16 +25,15 @@ class KeyframeFootprint {
                     const Eigen::Isometry3d& pose, double voxel_size, double min_depth,
                     double max_depth);
 
-  // The cell of a TSDF block (block coordinates).
-  static Eigen::Vector3i cellOf(const Eigen::Vector3i& block) {
-    return Eigen::Vector3i(floorDiv(block.x()), floorDiv(block.y()), floorDiv(block.z()));
-  }
-  static std::uint64_t key(const Eigen::Vector3i& cell);
-  static Eigen::Vector3i unpack(std::uint64_t key);
+  // The edge of a cell (m).
+  static double cellSize(double voxel_size);
+  // Whether a TSDF block (block coordinates) lies in one of `cells` (sorted).
+  static bool holds(const std::vector<std::uint64_t>& cells, const Eigen::Vector3i& block);
+  // Sorts cell keys and keeps each once.
+  static void sortUnique(std::vector<std::uint64_t>& cells);
 
   // Sorted, each once.
   const std::vector<std::uint64_t>& cells() const { return cells_; }
-  bool empty() const { return cells_.empty(); }
   // The same surfaces moved by `motion` (a loop's correction of the keyframe), roughly: the cells
   // the cells' centres move to. (Surfaces near a cell's face may cross into the next cell: the
   // footprint of the moved keyframe's depth says where exactly.)
@@ -49,7 +48,8 @@ class KeyframeFootprint {
   static int floorDiv(int b) {
     return b >= 0 ? b / kCellBlocks : -((-b + kCellBlocks - 1) / kCellBlocks);
   }
-  void sortUnique();
+  static std::uint64_t key(const Eigen::Vector3i& cell);
+  static Eigen::Vector3i unpack(std::uint64_t key);
 
   std::vector<std::uint64_t> cells_;
 };
