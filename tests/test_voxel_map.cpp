@@ -3,11 +3,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iostream>
+#include <iterator>
 #include <random>
 #include <set>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/mesh_extractor.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
 #include "rgbdmap/mapping/voxel_map.hpp"
 
@@ -237,6 +243,118 @@ TEST(VoxelMap, AClearedMapFusesAsANewOneInTheMemoryItHad) {
   EXPECT_EQ(reused.blockCount(), fresh.blockCount());
   reused.releaseUnused();
   EXPECT_LT(reused.memoryBytes(), memory);
+}
+
+// The points of a map as a sorted list: maps with blocks on disk write them in another order.
+std::vector<std::tuple<float, float, float, int>> sortedPoints(const VoxelMap& map) {
+  std::vector<std::tuple<float, float, float, int>> points;
+  for (const pcl::PointXYZRGB& p : extractOf(map))
+    points.emplace_back(p.x, p.y, p.z, (p.r << 16) | (p.g << 8) | p.b);
+  std::sort(points.begin(), points.end());
+  return points;
+}
+
+// How many points one list has that the other has not (both sorted), printing a few.
+std::size_t pointsApart(const std::vector<std::tuple<float, float, float, int>>& a,
+                        const std::vector<std::tuple<float, float, float, int>>& b) {
+  std::vector<std::tuple<float, float, float, int>> apart;
+  std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(),
+                                std::back_inserter(apart));
+  for (std::size_t i = 0; i < std::min<std::size_t>(apart.size(), 6); ++i)
+    std::cout << "  apart: " << std::get<0>(apart[i]) << " " << std::get<1>(apart[i]) << " "
+              << std::get<2>(apart[i]) << "\n";
+  return apart.size();
+}
+
+// A camera 2 m from a wall (z = 2) that walks 8 m along it and back, 3 noisy frames a step,
+// fused into `map`; `after` is called after each frame.
+void walkAlongAWall(VoxelMap& map, const std::function<void()>& after) {
+  const CameraIntrinsics c = smallCamera();
+  TsdfIntegrator tsdf = integratorFor(c);
+  unsigned seed = 1;
+  for (int step = 0; step <= 16; ++step) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation().x() = 0.5 * (step <= 8 ? step : 16 - step);
+    for (int frame = 0; frame < 3; ++frame) {
+      tsdf.integrate(planeDepth(c, 2.0, 0.3, 0.004, seed++), grey(c), pose, map);
+      after();
+    }
+  }
+}
+
+// Beyond its memory a map moves the blocks the camera left to disk; they come back when it
+// returns, and every map written (points, count, mesh) is the one a map without a limit gives.
+TEST(VoxelMap, BlocksBeyondItsMemoryGoToDiskAndTheMapWrittenStaysTheSame) {
+  VoxelMap whole(0.01), limited(0.01);
+  // Blocks away from surfaces are freed as the Mapper frees them, on disk or not.
+  std::size_t pruned = 0;
+  const auto prune = [&pruned](VoxelMap& map) {
+    if (map.integrations() % 4 == 0) pruned += map.pruneAwayFromSurfaces(6, 0.02f);
+  };
+  walkAlongAWall(whole, [&] { prune(whole); });
+  const std::size_t pruned_whole = std::exchange(pruned, 0);
+  const std::size_t all_blocks = whole.blockCount();
+  const std::size_t max_blocks = all_blocks / 4;
+  std::size_t most_in_memory = 0, stored = 0;
+  walkAlongAWall(limited, [&] {
+    prune(limited);
+    stored += limited.keepWithin(max_blocks, 3);
+    most_in_memory = std::max(most_in_memory, limited.blockCount());
+  });
+  std::cout << all_blocks << " blocks; at most " << most_in_memory << " in memory, "
+            << limited.storedBlocks().size() << " on disk at the end ("
+            << limited.storedBlocks().storedBytes() / 1024 << " KB), " << stored
+            << " moved to disk in all; " << pruned_whole << " freed\n";
+  ASSERT_GT(pruned_whole, 0u);
+  EXPECT_EQ(pruned, pruned_whole);
+  ASSERT_GT(limited.storedBlocks().size(), 0u);
+  EXPECT_GT(stored, limited.storedBlocks().size());  // some came back as the camera returned
+  // Blocks updated in the last 3 views stay (what the camera sees, and sees through): the limit
+  // is exceeded by them, not by the walk's length.
+  EXPECT_LT(most_in_memory, all_blocks / 2);
+  EXPECT_LT(limited.memoryBytes(), whole.memoryBytes() * 6 / 10);
+  EXPECT_EQ(limited.blockCount() + limited.storedBlocks().size(), all_blocks);
+
+  const auto expected = sortedPoints(whole);
+  ASSERT_GT(expected.size(), 10000u);
+  EXPECT_EQ(pointsApart(sortedPoints(limited), expected), 0u);
+  EXPECT_EQ(limited.pointCount(), expected.size());
+  EXPECT_EQ(whole.pointCount(), expected.size());
+  const TriangleMesh a = extractMesh(whole), b = extractMesh(limited);
+  ASSERT_GT(a.triangles.size(), 10000u);
+  EXPECT_EQ(b.triangles.size(), a.triangles.size());
+  EXPECT_EQ(b.vertices.size(), a.vertices.size());
+
+  // A region fused again (Mapper's region pass) replaces the map's blocks there, on disk or not,
+  // the same way.
+  VoxelMap region_whole(0.01), region_limited(0.01);
+  const auto in = [](const Eigen::Vector3i& block) { return block.x() >= 10 && block.x() < 30; };
+  region_whole.limitTo(in);
+  region_limited.limitTo(in);
+  const CameraIntrinsics c = smallCamera();
+  TsdfIntegrator tsdf = integratorFor(c);
+  for (int step = 0; step < 8; ++step) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(0.4 * step, 0.0, 0.01);  // the wall 1 cm nearer
+    const cv::Mat depth = planeDepth(c, 2.0, 0.3, 0.004, 100 + step);
+    tsdf.integrate(depth, grey(c), pose, region_whole);
+    tsdf.integrate(depth, grey(c), pose, region_limited);
+    region_limited.keepWithin(all_blocks / 20, 1);
+  }
+  ASSERT_GT(region_limited.storedBlocks().size(), 0u);
+  whole.replaceRegion(region_whole, in);
+  limited.replaceRegion(region_limited, in);
+  const auto replaced = sortedPoints(whole);
+  EXPECT_GT(pointsApart(replaced, expected), 1000u);
+  EXPECT_EQ(pointsApart(sortedPoints(limited), replaced), 0u);
+  EXPECT_EQ(limited.pointCount(), replaced.size());
+  EXPECT_EQ(whole.pointCount(), replaced.size());
+
+  // Emptied for a whole pass: what was on disk goes too.
+  limited.clear();
+  EXPECT_EQ(limited.storedBlocks().size(), 0u);
+  EXPECT_EQ(limited.pointCount(), 0u);
+  EXPECT_TRUE(extractOf(limited).empty());
 }
 
 }  // namespace

@@ -84,6 +84,9 @@ std::string RunStats::toJson() const {
       << "  \"kept_keyframes_mb\": " << kept_keyframes_mb << ",\n"
       << "  \"kept_keyframes_on_disk\": " << kept_keyframes_on_disk << ",\n"
       << "  \"kept_keyframes_disk_mb\": " << kept_keyframes_disk_mb << ",\n"
+      << "  \"map_blocks_stored\": " << map_blocks_stored << ",\n"
+      << "  \"map_blocks_on_disk\": " << map_blocks_on_disk << ",\n"
+      << "  \"map_disk_mb\": " << map_disk_mb << ",\n"
       << "  \"place_database_mb\": " << place_database_mb << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);

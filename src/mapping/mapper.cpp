@@ -22,6 +22,9 @@ constexpr std::chrono::milliseconds kCountPointsEvery{1000};
 constexpr std::uint64_t kPruneEvery = 10;
 constexpr std::uint64_t kPruneIdleKeyframes = 30;
 constexpr float kPruneClearanceVoxels = 2.0f;
+// Beyond map.memory, blocks go to disk once no keyframe has updated them for this many: those in
+// view stay, and a camera turning back within a few keyframes finds its blocks in memory.
+constexpr std::uint64_t kStoreIdleKeyframes = 10;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -51,6 +54,8 @@ Mapper::Mapper(const CameraIntrinsics& camera, const FilterOptions& filter, cons
       voxel_size_(map.voxel_size),
       min_observations_(static_cast<std::uint32_t>(map.min_observations)),
       refusion_(refusion),
+      max_blocks_(static_cast<std::size_t>(map.memory * 1024.0 * 1024.0 /
+                                           static_cast<double>(sizeof(VoxelMap::Block)))),
       corrections_(corrections),
       map_(voxel_size_, min_observations_),
       store_(static_cast<std::size_t>(refusion.keyframe_memory * 1024.0 * 1024.0)),
@@ -70,6 +75,8 @@ void Mapper::integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, Vox
   if (integrations % kPruneEvery == 0)
     map.pruneAwayFromSurfaces(kPruneIdleKeyframes,
                               kPruneClearanceVoxels * static_cast<float>(voxel_size_));
+  const std::size_t stored = map.keepWithin(max_blocks_, kStoreIdleKeyframes);
+  if (stored > 0) stats_.map_blocks_stored.fetch_add(stored);
 }
 
 void Mapper::fuse(const Frame& keyframe) {
@@ -343,6 +350,15 @@ std::size_t Mapper::memoryBytes() const {
          (shown_ ? shown_->capacity() * sizeof(PackedMapPoint) : 0) +
          (shown_mesh_ ? shown_mesh_->memoryBytes() : 0) +
          (free_space_ ? free_space_->memoryBytes() : 0);
+}
+
+std::size_t Mapper::blocksOnDisk() const {
+  return map_.storedBlocks().size() + (region_ ? region_->map.storedBlocks().size() : 0);
+}
+
+std::uint64_t Mapper::mapDiskBytes() const {
+  return map_.storedBlocks().fileBytes() +
+         (region_ ? region_->map.storedBlocks().fileBytes() : 0);
 }
 
 std::shared_ptr<const MapCloud> Mapper::snapshot() const {

@@ -63,6 +63,10 @@ Keys mapKeys(MapOptions& o) {
              "this (1 = distances along the ray)"),
       integer("map.fusion_threads", &o.fusion_threads, 0, 256,
               "threads that update voxels (0 = every core when replaying, 1 with a live camera)"),
+      number("map.memory", &o.memory, 0, 1000000,
+             "MB of map blocks in memory; beyond it those the camera left longest ago move to a "
+             "scratch file on disk (in TMPDIR, else /tmp) and come back when it returns; every "
+             "map written is still the whole map (0 = no limit)"),
   };
 }
 

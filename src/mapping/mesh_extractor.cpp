@@ -36,60 +36,76 @@ struct Neighbourhood {
   std::uint64_t id[kGathered];
 };
 
-void gather(const VoxelMap& map, const KeyIndex& index, std::uint32_t block_index,
-            Neighbourhood& n) {
-  const Eigen::Vector3i coords = map.block(block_index).origin / kEdge;
-  std::uint32_t around[8];  // by (dx | dy << 1 | dz << 2), UINT32_MAX where there is none
+// Blocks by number: those in memory then those on disk (VoxelMap::allBlockCoordinates()).
+// Numbers name voxels map-wide for welding, and index which blocks are near the zero level.
+struct BlockNumbers {
+  std::vector<Eigen::Vector3i> coordinates;
+  KeyIndex index;  // block key -> number
+  std::uint32_t find(const Eigen::Vector3i& coords) const {
+    const auto it = index.find(blockKey(coords));
+    return it == index.end() ? UINT32_MAX : it->second;
+  }
+};
+
+void gather(const VoxelMap& map, const BlockNumbers& numbers, std::uint32_t block,
+            VoxelMap::BlockCache& cache, Neighbourhood& n) {
+  const Eigen::Vector3i coords = numbers.coordinates[block];
+  const VoxelMap::Block* around[8];  // by (dx | dy << 1 | dz << 2), nullptr where there is none
+  std::uint32_t number[8];
   for (int i = 0; i < 8; ++i) {
-    const auto it = index.find(blockKey(coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
-    around[i] = it == index.end() ? UINT32_MAX : it->second;
+    const Eigen::Vector3i at = coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2);
+    number[i] = numbers.find(at);
+    around[i] = number[i] == UINT32_MAX ? nullptr : map.findBlock(at, cache);
   }
   const auto min_observations = map.minObservations();
   for (int z = 0; z < kSpan; ++z) {
     for (int y = 0; y < kSpan; ++y) {
       for (int x = 0; x < kSpan; ++x) {
         const int at = (z * kSpan + y) * kSpan + x;
-        const std::uint32_t b = around[(x >> 3) | ((y >> 3) << 1) | ((z >> 3) << 2)];
-        if (b == UINT32_MAX) {
+        const int which = (x >> 3) | ((y >> 3) << 1) | ((z >> 3) << 2);
+        if (around[which] == nullptr) {
           n.usable[at] = false;
           continue;
         }
         const int local = ((z & 7) * kEdge + (y & 7)) * kEdge + (x & 7);
-        const VoxelMap::Voxel& v = map.block(b).voxels[local];
+        const VoxelMap::Voxel& v = around[which]->voxels[local];
         n.sdf[at] = v.sdf();
         n.usable[at] = v.observed() && v.observations >= min_observations;
         n.voxel[at] = &v;
-        n.id[at] = static_cast<std::uint64_t>(b) * VoxelMap::kBlockVoxels + local;
+        n.id[at] = static_cast<std::uint64_t>(number[which]) * VoxelMap::kBlockVoxels + local;
       }
     }
   }
 }
 
-// Builds the mesh of a map: the blocks indexed by coordinates, which of them hold a voxel near
-// the zero level, and the vertices welded by edge.
+// Builds the mesh of a map: the blocks numbered, which of them hold a voxel near the zero level,
+// and the vertices welded by edge. Blocks on disk are read back a few at a time.
 class MeshBuilder {
  public:
   MeshBuilder(const VoxelMap& map, const MeshOptions& options)
       : map_(map),
         voxel_(static_cast<float>(map.voxelSize())),
         max_near_(options.max_near_voxels * voxel_),
-        max_jump_(options.max_jump_voxels * voxel_),
-        slots_(static_cast<std::uint32_t>(map.blockSlots())) {
-    // Slots of pruned blocks are skipped: they are in no index and near nothing.
-    index_.reserve(map.blockCount());
-    for (std::uint32_t b = 0; b < slots_; ++b)
-      if (map.block(b).in_use) index_.emplace(blockKey(map.block(b).origin / kEdge), b);
+        max_jump_(options.max_jump_voxels * voxel_) {
+    numbers_.coordinates = map.allBlockCoordinates();
+    const auto blocks = static_cast<std::uint32_t>(numbers_.coordinates.size());
+    numbers_.index.reserve(blocks);
+    for (std::uint32_t b = 0; b < blocks; ++b)
+      numbers_.index.emplace(blockKey(numbers_.coordinates[b]), b);
     // Blocks with a voxel near enough to the zero level to end a trusted crossing. Most blocks
     // of the band around a surface have none, and a block's cells only reach into the blocks at
     // +1 along each axis: when none of those 8 has one, the block is skipped without gathering.
-    near_.assign(slots_, false);
-    for (std::uint32_t b = 0; b < slots_; ++b)
-      if (map.block(b).in_use)
-        for (const VoxelMap::Voxel& v : map.block(b).voxels)
-          if (v.observed() && std::abs(v.sdf()) < max_near_) {
-            near_[b] = true;
-            break;
-          }
+    near_.assign(blocks, false);
+    for (std::uint32_t b = 0; b < blocks; ++b) {
+      cache_.trim();
+      const VoxelMap::Block* block = map.findBlock(numbers_.coordinates[b], cache_);
+      if (block == nullptr) continue;
+      for (const VoxelMap::Voxel& v : block->voxels)
+        if (v.observed() && std::abs(v.sdf()) < max_near_) {
+          near_[b] = true;
+          break;
+        }
+    }
     for (int c = 0; c < 8; ++c)
       corner_offset_[c] =
           (kCubeCorner[c][2] * kSpan + kCubeCorner[c][1]) * kSpan + kCubeCorner[c][0];
@@ -97,10 +113,11 @@ class MeshBuilder {
 
   TriangleMesh build() {
     Neighbourhood n;
-    for (std::uint32_t b = 0; b < slots_; ++b) {
-      if (!map_.block(b).in_use || !nearAround(b)) continue;
-      gather(map_, index_, b, n);
-      const Eigen::Vector3i origin = map_.block(b).origin;
+    for (std::uint32_t b = 0; b < numbers_.coordinates.size(); ++b) {
+      if (!nearAround(b)) continue;
+      cache_.trim();  // what gather() reads stays until the block's cells are meshed
+      gather(map_, numbers_, b, cache_, n);
+      const Eigen::Vector3i origin = numbers_.coordinates[b] * kEdge;
       for (int z = 0; z < kEdge; ++z)
         for (int y = 0; y < kEdge; ++y)
           for (int x = 0; x < kEdge; ++x) meshCell(n, origin, (z * kSpan + y) * kSpan + x);
@@ -110,10 +127,11 @@ class MeshBuilder {
 
  private:
   bool nearAround(std::uint32_t b) const {
-    const Eigen::Vector3i coords = map_.block(b).origin / kEdge;
+    const Eigen::Vector3i coords = numbers_.coordinates[b];
     for (int i = 0; i < 8; ++i) {
-      const auto it = index_.find(blockKey(coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2)));
-      if (it != index_.end() && near_[it->second]) return true;
+      const std::uint32_t at =
+          numbers_.find(coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2));
+      if (at != UINT32_MAX && near_[at]) return true;
     }
     return false;
   }
@@ -176,8 +194,8 @@ class MeshBuilder {
 
   const VoxelMap& map_;
   const float voxel_, max_near_, max_jump_;
-  const std::uint32_t slots_;
-  KeyIndex index_;
+  BlockNumbers numbers_;
+  VoxelMap::BlockCache cache_;
   std::vector<bool> near_;
   KeyIndex welded_;
   int corner_offset_[8];

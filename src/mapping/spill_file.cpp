@@ -36,10 +36,10 @@ SpillFile::~SpillFile() {
 bool SpillFile::open(std::string& error) {
   const char* tmpdir = std::getenv("TMPDIR");
   folder_ = tmpdir && *tmpdir ? tmpdir : "/tmp";
-  std::string name = folder_ + "/rgbdmap-keyframes-XXXXXX";
+  std::string name = folder_ + "/rgbdmap-scratch-XXXXXX";
   fd_ = ::mkstemp(name.data());
   if (fd_ < 0) {
-    error = folder_ + ": cannot make a file for keyframe images: " + std::strerror(errno);
+    error = folder_ + ": cannot make a file for " + what_ + ": " + std::strerror(errno);
     return false;
   }
   ::unlink(name.c_str());  // gone with the last descriptor, however the run ends
@@ -52,7 +52,7 @@ bool SpillFile::append(const std::vector<std::uint8_t>& a, const std::vector<std
   const std::uint64_t end = end_.load();
   if (!whole(::pwrite, fd_, a.data(), a.size(), end) ||
       !whole(::pwrite, fd_, b.data(), b.size(), end + a.size())) {
-    error = folder_ + ": cannot write keyframe images: " + std::strerror(errno);
+    error = folder_ + ": cannot write " + what_ + ": " + std::strerror(errno);
     return false;
   }
   offset = end;
@@ -65,7 +65,7 @@ bool SpillFile::read(std::uint64_t offset, std::size_t size, std::vector<std::ui
   out.resize(size);
   const bool written = fd_ >= 0 && offset + size <= end_.load();
   if (!written || !whole(::pread, fd_, out.data(), size, offset)) {
-    error = folder_ + ": cannot read keyframe images back: " +
+    error = folder_ + ": cannot read " + what_ + " back: " +
             (!written ? "not written" : std::strerror(errno));
     return false;
   }

@@ -117,6 +117,18 @@ void TsdfIntegrator::touchSeenThrough(const cv::Mat& depth,
   const float cx = static_cast<float>(camera.cx) + 0.5f, cy = static_cast<float>(camera.cy) + 0.5f;
   const float edge = static_cast<float>(map.voxelSize() * VoxelMap::kBlockEdge);
   const float half_diagonal = 0.5f * std::sqrt(3.0f) * edge;
+  const auto seenThrough = [&](const Eigen::Vector3i& block) {
+    const Eigen::Vector3f c =
+        world_to_camera * ((block.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * edge);
+    if (c.z() <= 0.0f) return false;
+    const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
+    if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(depth.cols) &&
+          v < static_cast<float>(depth.rows)))
+      return false;
+    const int ui = static_cast<int>(u), vi = static_cast<int>(v);
+    const float d = depth.ptr<float>(vi)[ui];
+    return d > 0.0f && (d - c.z() + half_diagonal) * incidenceAt(ui, vi) >= bandAt(d);
+  };
   const std::vector<Eigen::Vector3i>& coordinates = map.blockCoordinates();
   const std::size_t tasks = (coordinates.size() + kScanBlocksPerTask - 1) / kScanBlocksPerTask;
   seen_through_.resize(std::max(seen_through_.size(), tasks));
@@ -125,25 +137,32 @@ void TsdfIntegrator::touchSeenThrough(const cv::Mat& depth,
     found.clear();
     const std::size_t first = task * kScanBlocksPerTask;
     const std::size_t last = std::min(coordinates.size(), first + kScanBlocksPerTask);
-    for (std::size_t i = first; i < last; ++i) {
-      if (coordinates[i] == VoxelMap::kNoBlock) continue;
-      const Eigen::Vector3f c =
-          world_to_camera *
-          ((coordinates[i].cast<float>() + Eigen::Vector3f::Constant(0.5f)) * edge);
-      if (c.z() <= 0.0f) continue;
-      const float u = fx * c.x() / c.z() + cx, v = fy * c.y() / c.z() + cy;
-      if (!(u >= 0.0f && v >= 0.0f && u < static_cast<float>(depth.cols) &&
-            v < static_cast<float>(depth.rows)))
-        continue;
-      const int ui = static_cast<int>(u), vi = static_cast<int>(v);
-      const float d = depth.ptr<float>(vi)[ui];
-      if (d > 0.0f && (d - c.z() + half_diagonal) * incidenceAt(ui, vi) >= bandAt(d))
+    for (std::size_t i = first; i < last; ++i)
+      if (coordinates[i] != VoxelMap::kNoBlock && seenThrough(coordinates[i]))
         found.push_back(static_cast<std::uint32_t>(i));
-    }
   };
   runTasks(pool, tasks, scan);
+  // Blocks on disk (VoxelMap::keepWithin) within the depth seen come back if seen through. Found
+  // before any is touched: touching a block brings its neighbours back from disk.
+  std::vector<Eigen::Vector3i> stored_through;
+  if (!map.storedBlocks().empty()) {
+    float farthest = 0.0f;
+    for (int v = 0; v < depth.rows; ++v) {
+      const float* row = depth.ptr<float>(v);
+      for (int u = 0; u < depth.cols; ++u) farthest = std::max(farthest, row[u]);
+    }
+    // Depth is along the optical axis: a ray to the image's corner is longer.
+    const float corner_x = std::max(cx, static_cast<float>(depth.cols) - cx) / fx;
+    const float corner_y = std::max(cy, static_cast<float>(depth.rows) - cy) / fy;
+    const float reach =
+        farthest * std::sqrt(1.0f + corner_x * corner_x + corner_y * corner_y) + half_diagonal;
+    const Eigen::Vector3f centre = world_to_camera.inverse().translation();
+    for (const Eigen::Vector3i& b : map.storedNear(centre, reach))
+      if (seenThrough(b)) stored_through.push_back(b);
+  }
   for (std::size_t task = 0; task < tasks; ++task)
     for (const std::uint32_t i : seen_through_[task]) map.touchExisting(i);
+  for (const Eigen::Vector3i& b : stored_through) map.touchBlock(b);
 }
 
 void TsdfIntegrator::prepareIncidence(const cv::Mat& depth, WorkerPool* pool) {

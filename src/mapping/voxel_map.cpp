@@ -1,7 +1,11 @@
 #include "rgbdmap/mapping/voxel_map.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
 
 namespace rgbdmap {
 namespace {
@@ -10,6 +14,7 @@ constexpr std::size_t kCountBlocksPerTask = 64;  // blocks counted per task
 constexpr int kBits = 21;
 constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20, 2^20) to [0, 2^21)
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
+constexpr int kCellBits = 3;  // blocks on disk are found by cells of 8x8x8 blocks (storedNear)
 
 // A surface voxel's point, for either point type (pcl::PointXYZRGB or PackedMapPoint).
 template <typename Point>
@@ -27,7 +32,8 @@ VoxelMap::VoxelMap(double voxel_size, std::uint32_t min_observations)
 
 std::size_t VoxelMap::memoryBytes() const {
   return blocks_.capacity() * sizeof(Block) +
-         block_index_.bucket_count() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 8);
+         block_index_.bucket_count() * (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 8) +
+         stored_.memoryBytes();
 }
 
 bool VoxelMap::keyFor(const Eigen::Vector3f& p, std::uint64_t& key) const {
@@ -64,25 +70,36 @@ Eigen::Vector3i VoxelMap::unpack(std::uint64_t key) {
 std::uint32_t VoxelMap::touchBlock(const Eigen::Vector3i& block_coords) {
   std::uint64_t key;
   if (!pack(block_coords, key)) return UINT32_MAX;
-  const std::uint32_t slot =
-      free_.empty() ? static_cast<std::uint32_t>(blocks_.size()) : free_.back();
-  if (allowed_ && block_index_.find(key) == block_index_.end() && !allowed_(block_coords))
-    return UINT32_MAX;
-  const auto [it, inserted] = block_index_.try_emplace(key, slot);
-  if (inserted) {
-    if (free_.empty()) {
-      blocks_.emplace_back();
-      coordinates_.push_back(block_coords);
-    } else {
-      free_.pop_back();
-      blocks_[slot] = Block{};
-      coordinates_[slot] = block_coords;
-    }
-    blocks_[slot].origin = block_coords * kBlockEdge;
-    link(slot, block_coords);
+  const auto it = block_index_.find(key);
+  std::uint32_t index;
+  if (it != block_index_.end()) {
+    index = it->second;
+  } else if (!stored_.empty() && stored_.find(key) != nullptr) {
+    index = restore(key, block_coords);
+  } else {
+    if (allowed_ && !allowed_(block_coords)) return UINT32_MAX;
+    index = place(key, block_coords);
   }
-  touchExisting(it->second);
-  return it->second;
+  touchExisting(index);
+  return index;
+}
+
+std::uint32_t VoxelMap::place(std::uint64_t key, const Eigen::Vector3i& block_coords) {
+  std::uint32_t slot;
+  if (free_.empty()) {
+    slot = static_cast<std::uint32_t>(blocks_.size());
+    blocks_.emplace_back();
+    coordinates_.push_back(block_coords);
+  } else {
+    slot = free_.back();
+    free_.pop_back();
+    blocks_[slot] = Block{};
+    coordinates_[slot] = block_coords;
+  }
+  blocks_[slot].origin = block_coords * kBlockEdge;
+  block_index_.emplace(key, slot);
+  link(slot, block_coords);
+  return slot;
 }
 
 void VoxelMap::link(std::uint32_t index, const Eigen::Vector3i& block_coords) {
@@ -102,13 +119,161 @@ void VoxelMap::link(std::uint32_t index, const Eigen::Vector3i& block_coords) {
 
 void VoxelMap::touchExisting(std::uint32_t index) {
   Block& b = blocks_[index];
-  if (b.touched_in != integration_) {
-    b.touched_in = integration_;
-    touched_.push_back(index);
+  if (b.touched_in == integration_) return;
+  b.touched_in = integration_;
+  touched_.push_back(index);
+  if (stored_.empty()) return;
+  // Its neighbours on disk come back: the surface they write depends on this block's voxels, and
+  // their counts on disk would go stale.
+  for (int n = 0; n < 6; ++n) {
+    if (b.neighbours[n] != kNone) continue;
+    Eigen::Vector3i at = coordinates_[index];
+    at[n / 2] += n % 2 == 0 ? -1 : 1;
+    std::uint64_t key;
+    if (pack(at, key) && stored_.find(key) != nullptr) restore(key, at);
   }
 }
 
+std::uint32_t VoxelMap::restore(std::uint64_t key, const Eigen::Vector3i& block_coords) {
+  const BlockStore::Stored stored = *stored_.find(key);
+  stored_.erase(key);
+  noteStored(key, false);
+  const std::uint32_t index = place(key, block_coords);
+  Block& b = blocks_[index];
+  std::vector<std::uint8_t> scratch;
+  std::string error;
+  b.touched_in = stored.touched_in;
+  if (stored_.read(stored, b.voxels, scratch, error)) {
+    b.surface_points = stored.surface_points;
+  } else {
+    // Lost: the block is fused anew from what is seen next.
+    spdlog::error("{}: a block of the map at {} {} {} is lost", error, block_coords.x(),
+                  block_coords.y(), block_coords.z());
+    b.voxels.fill(Voxel{});
+    points_ -= stored.surface_points;
+  }
+  return index;
+}
+
+const VoxelMap::Block* VoxelMap::readStored(std::uint64_t key, const Eigen::Vector3i& block_coords,
+                                            BlockCache& cache) const {
+  const auto cached = cache.blocks_.find(key);
+  if (cached != cache.blocks_.end()) return cached->second.get();
+  const BlockStore::Stored* stored = stored_.find(key);
+  if (stored == nullptr) return nullptr;
+  auto b = std::make_unique<Block>();
+  b->origin = block_coords * kBlockEdge;
+  b->surface_points = stored->surface_points;
+  b->in_use = false;  // in no slot
+  std::string error;
+  if (!stored_.read(*stored, b->voxels, cache.scratch_, error)) {
+    spdlog::error("{}: a block of the map at {} {} {} is left out", error, block_coords.x(),
+                  block_coords.y(), block_coords.z());
+    return nullptr;
+  }
+  return cache.blocks_.emplace(key, std::move(b)).first->second.get();
+}
+
+const VoxelMap::Block* VoxelMap::findBlock(const Eigen::Vector3i& block_coords,
+                                           BlockCache& cache) const {
+  std::uint64_t key;
+  if (!pack(block_coords, key)) return nullptr;
+  const auto it = block_index_.find(key);
+  if (it != block_index_.end()) return &blocks_[it->second];
+  return stored_.empty() ? nullptr : readStored(key, block_coords, cache);
+}
+
+std::vector<Eigen::Vector3i> VoxelMap::allBlockCoordinates() const {
+  std::vector<Eigen::Vector3i> all;
+  all.reserve(blockCount() + stored_.size());
+  for (const Eigen::Vector3i& c : coordinates_)
+    if (c != kNoBlock) all.push_back(c);
+  for (const auto& [key, stored] : stored_.blocks()) all.push_back(unpack(key));
+  return all;
+}
+
+std::size_t VoxelMap::keepWithin(std::size_t max_blocks, std::uint64_t min_idle) {
+  if (max_blocks == 0 || blockCount() <= max_blocks || store_refused_) return 0;
+  // The least recently updated first; among those updated together, in key order, which keeps
+  // blocks next to one another along x together on disk.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> idle;  // (integration, key)
+  for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
+    const Block& b = blocks_[i];
+    std::uint64_t key;
+    if (b.in_use && b.touched_in + min_idle < integration_ && pack(coordinates_[i], key))
+      idle.emplace_back(b.touched_in, key);
+  }
+  const std::size_t wanted = std::min(idle.size(), blockCount() - (max_blocks - max_blocks / 4));
+  std::partial_sort(idle.begin(), idle.begin() + static_cast<std::ptrdiff_t>(wanted), idle.end());
+  BlockCache cache;
+  std::size_t moved = 0;
+  for (std::size_t k = 0; k < wanted; ++k) {
+    cache.trim();
+    if (!store(block_index_.at(idle[k].second), cache)) break;
+    ++moved;
+  }
+  return moved;
+}
+
+bool VoxelMap::store(std::uint32_t index, BlockCache& cache) {
+  Block& b = blocks_[index];
+  // Its count is current when it goes: no neighbour changes while it is on disk.
+  if (b.count_due) recount(b, &cache);
+  std::uint64_t key;
+  pack(coordinates_[index], key);
+  std::string error;
+  if (!stored_.put(key, b.voxels, b.surface_points, b.touched_in, error)) {
+    spdlog::warn("{}: the map stays in memory from now on", error);
+    store_refused_ = true;
+    return false;
+  }
+  noteStored(key, true);
+  unplace(index);
+  return true;
+}
+
+void VoxelMap::noteStored(std::uint64_t key, bool stored) {
+  std::uint64_t cell;
+  pack(unpack(key).unaryExpr([](int c) { return c >> kCellBits; }), cell);
+  std::vector<std::uint64_t>& keys = stored_cells_[cell];
+  if (stored) {
+    keys.push_back(key);
+    return;
+  }
+  const auto it = std::find(keys.begin(), keys.end(), key);
+  if (it != keys.end()) {
+    *it = keys.back();
+    keys.pop_back();
+  }
+  if (keys.empty()) stored_cells_.erase(cell);
+}
+
+std::vector<Eigen::Vector3i> VoxelMap::storedNear(const Eigen::Vector3f& centre,
+                                                  float radius) const {
+  std::vector<Eigen::Vector3i> near;
+  const float cell_edge = static_cast<float>(voxel_size_) * kBlockEdge * (1 << kCellBits);
+  const float reach = radius + 0.5f * std::sqrt(3.0f) * cell_edge;
+  for (const auto& [cell, keys] : stored_cells_) {
+    const Eigen::Vector3f middle =
+        (unpack(cell).cast<float>() + Eigen::Vector3f::Constant(0.5f)) * cell_edge;
+    if ((middle - centre).squaredNorm() > reach * reach) continue;
+    for (const std::uint64_t key : keys) near.push_back(unpack(key));
+  }
+  return near;
+}
+
+void VoxelMap::recount(Block& b, BlockCache* cache) {
+  b.count_due = false;
+  std::uint32_t count = 0;
+  forEachSurfaceVoxel(b, neighboursOf(b, cache),
+                      [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
+  points_ = points_ + count - b.surface_points;
+  b.surface_points = count;
+}
+
 void VoxelMap::clear() {
+  stored_.clear();
+  stored_cells_.clear();
   blocks_.clear();
   block_index_.clear();
   coordinates_.clear();
@@ -120,7 +285,7 @@ void VoxelMap::clear() {
 }
 
 std::size_t VoxelMap::pruneAwayFromSurfaces(std::uint64_t idle, float clearance) {
-  std::size_t freed = 0;
+  std::vector<Eigen::Vector3i> gone;
   for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
     Block& b = blocks_[i];
     if (!b.in_use || b.touched_in + idle >= integration_) continue;
@@ -131,20 +296,42 @@ std::size_t VoxelMap::pruneAwayFromSurfaces(std::uint64_t idle, float clearance)
       });
     };
     if (!all_beyond(1.0f) && !all_beyond(-1.0f)) continue;
+    gone.push_back(coordinates_[i]);
     release(i);
-    ++freed;
   }
+  // Those on disk alike, by the distances noted when they went (no block changes on disk).
+  const float step = Voxel::kSdfStep;
+  std::vector<std::uint64_t> idle_stored;
+  for (const auto& [key, stored] : stored_.blocks())
+    if (stored.touched_in + idle < integration_ &&
+        (stored.least_sdf > stored.greatest_sdf ||  // none observed
+         static_cast<float>(stored.least_sdf) * step >= clearance ||
+         static_cast<float>(stored.greatest_sdf) * step <= -clearance))
+      idle_stored.push_back(key);
+  for (const std::uint64_t key : idle_stored) {
+    points_ -= stored_.find(key)->surface_points;
+    stored_.erase(key);
+    noteStored(key, false);
+    gone.push_back(unpack(key));
+  }
+  // A voxel beside a freed one may have been a surface voxel by comparison with it.
+  recountAround(gone);
   // Freed blocks may still be listed for counting: they count nothing now.
-  return freed;
+  return gone.size();
 }
 
 void VoxelMap::release(std::uint32_t i) {
   Block& b = blocks_[i];
+  points_ -= b.surface_points;
+  b.surface_points = 0;
+  unplace(i);
+}
+
+void VoxelMap::unplace(std::uint32_t i) {
+  Block& b = blocks_[i];
   std::uint64_t key;
   pack(coordinates_[i], key);
   block_index_.erase(key);
-  points_ -= b.surface_points;
-  b.surface_points = 0;
   b.in_use = false;
   for (int n = 0; n < 6; ++n) {
     if (b.neighbours[n] != kNone) blocks_[b.neighbours[n]].neighbours[n ^ 1] = kNone;
@@ -157,26 +344,67 @@ void VoxelMap::release(std::uint32_t i) {
 void VoxelMap::replaceRegion(const VoxelMap& from,
                              const std::function<bool(const Eigen::Vector3i&)>& in) {
   beginIntegration();
+  // The blocks next to the region, outside it, lose the voxels they compared theirs with: they
+  // are counted again (in memory: those on disk come back).
+  const auto touchAround = [&](const Eigen::Vector3i& coords) {
+    for (int n = 0; n < 6; ++n) {
+      Eigen::Vector3i at = coords;
+      at[n / 2] += n % 2 == 0 ? -1 : 1;
+      std::uint64_t key;
+      if (in(at) || !pack(at, key)) continue;
+      const auto it = block_index_.find(key);
+      if (it != block_index_.end())
+        touchExisting(it->second);
+      else if (!stored_.empty() && stored_.find(key) != nullptr)
+        touchExisting(restore(key, at));
+    }
+  };
+  std::vector<std::uint64_t> stored_in;
+  for (const auto& [key, stored] : stored_.blocks())
+    if (in(unpack(key))) stored_in.push_back(key);
+  for (const std::uint64_t key : stored_in) {
+    points_ -= stored_.find(key)->surface_points;
+    stored_.erase(key);
+    noteStored(key, false);
+    touchAround(unpack(key));
+  }
   for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
     if (!blocks_[i].in_use || !in(coordinates_[i])) continue;
-    // Its neighbours outside the region lose the voxels they compared theirs with: counted again.
-    for (const std::uint32_t n : blocks_[i].neighbours)
-      if (n != kNone && !in(coordinates_[n])) touchExisting(n);
+    touchAround(coordinates_[i]);
     release(i);
   }
-  for (std::uint32_t j = 0; j < from.blocks_.size(); ++j) {
-    const Block& b = from.blocks_[j];
-    if (!b.in_use || !in(from.coordinates_[j])) continue;
-    const std::uint32_t index = touchBlock(from.coordinates_[j]);
+  const auto take = [&](const Eigen::Vector3i& coords, const Block& b) {
+    const std::uint32_t index = touchBlock(coords);
     if (index != kNone) blocks_[index].voxels = b.voxels;
+  };
+  for (std::uint32_t j = 0; j < from.blocks_.size(); ++j)
+    if (from.blocks_[j].in_use && in(from.coordinates_[j]))
+      take(from.coordinates_[j], from.blocks_[j]);
+  BlockCache cache;
+  for (const auto& [key, stored] : from.stored_.blocks()) {
+    const Eigen::Vector3i coords = unpack(key);
+    if (!in(coords)) continue;
+    cache.trim();
+    if (const Block* b = from.readStored(key, coords, cache)) take(coords, *b);
   }
   finishIntegration();
 }
 
-VoxelMap::Neighbours VoxelMap::neighboursOf(const Block& block) const {
+VoxelMap::Neighbours VoxelMap::neighboursOf(const Block& block, BlockCache* cache) const {
   Neighbours n;
-  for (int i = 0; i < 6; ++i)
-    n[i] = block.neighbours[i] == kNone ? nullptr : &blocks_[block.neighbours[i]];
+  const bool any_stored = cache != nullptr && !stored_.empty();
+  for (int i = 0; i < 6; ++i) {
+    if (block.neighbours[i] != kNone) {
+      n[i] = &blocks_[block.neighbours[i]];
+    } else if (any_stored) {
+      // Linked neighbours are all those in memory, but a block read back from disk has no links.
+      Eigen::Vector3i at = block.origin / kBlockEdge;
+      at[i / 2] += i % 2 == 0 ? -1 : 1;
+      n[i] = findBlock(at, *cache);
+    } else {
+      n[i] = nullptr;
+    }
+  }
   return n;
 }
 
@@ -248,22 +476,53 @@ void VoxelMap::forEachSurfaceVoxel(const Block& block, const Neighbours& neighbo
   }
 }
 
+void VoxelMap::markDue(std::uint32_t i) {
+  Block& b = blocks_[i];
+  if (b.count_due) return;
+  b.count_due = true;
+  count_due_.push_back(i);
+}
+
 void VoxelMap::finishIntegration() {
-  auto due = [&](std::uint32_t i) {
-    Block& b = blocks_[i];
-    if (b.count_due) return;
-    b.count_due = true;
-    count_due_.push_back(i);
-  };
   for (const std::uint32_t i : touched_) {
-    due(i);
+    markDue(i);
     for (const std::uint32_t n : blocks_[i].neighbours)
-      if (n != kNone) due(n);
+      if (n != kNone) markDue(n);
   }
   touched_.clear();
 }
 
+void VoxelMap::recountAround(const std::vector<Eigen::Vector3i>& gone) {
+  BlockCache cache;
+  for (const Eigen::Vector3i& coords : gone) {
+    for (int n = 0; n < 6; ++n) {
+      Eigen::Vector3i at = coords;
+      at[n / 2] += n % 2 == 0 ? -1 : 1;
+      std::uint64_t key;
+      if (!pack(at, key)) continue;
+      const auto it = block_index_.find(key);
+      if (it != block_index_.end()) {
+        markDue(it->second);
+        continue;
+      }
+      const BlockStore::Stored* stored = stored_.empty() ? nullptr : stored_.find(key);
+      if (stored == nullptr) continue;
+      cache.trim();
+      const Block* b = readStored(key, at, cache);
+      if (b == nullptr) continue;
+      std::uint32_t count = 0;
+      forEachSurfaceVoxel(*b, neighboursOf(*b, &cache),
+                          [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
+      points_ = points_ + count - stored->surface_points;
+      stored_.setSurfacePoints(key, count);
+    }
+  }
+}
+
 std::size_t VoxelMap::pointCount(WorkerPool* pool) {
+  // A slot freed and used again can be listed twice: each block is counted by one task only.
+  std::sort(count_due_.begin(), count_due_.end());
+  count_due_.erase(std::unique(count_due_.begin(), count_due_.end()), count_due_.end());
   // Each block is counted by one task, reading its neighbours' voxels and writing only its own
   // count; the tasks' totals are then added (integers: the order does not matter).
   const std::size_t tasks = (count_due_.size() + kCountBlocksPerTask - 1) / kCountBlocksPerTask;
@@ -272,12 +531,14 @@ std::size_t VoxelMap::pointCount(WorkerPool* pool) {
     const std::size_t first = task * kCountBlocksPerTask;
     const std::size_t last = std::min(count_due_.size(), first + kCountBlocksPerTask);
     std::int64_t change = 0;
+    BlockCache cache;
     for (std::size_t k = first; k < last; ++k) {
       Block& b = blocks_[count_due_[k]];
       b.count_due = false;
       if (!b.in_use) continue;
+      cache.trim();
       std::uint32_t count = 0;
-      forEachSurfaceVoxel(b, neighboursOf(b),
+      forEachSurfaceVoxel(b, neighboursOf(b, &cache),
                           [&](const Eigen::Vector3f&, const Voxel&) { ++count; });
       change += static_cast<std::int64_t>(count) - b.surface_points;
       b.surface_points = count;
@@ -292,10 +553,18 @@ std::size_t VoxelMap::pointCount(WorkerPool* pool) {
 
 template <typename Emit>
 void VoxelMap::forEachPoint(Emit&& emit) const {
+  BlockCache cache;
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     const Block& b = blocks_[i];
     if (!b.in_use || (b.surface_points == 0 && !b.count_due)) continue;
-    forEachSurfaceVoxel(b, neighboursOf(b), emit);
+    cache.trim();
+    forEachSurfaceVoxel(b, neighboursOf(b, &cache), emit);
+  }
+  for (const auto& [key, stored] : stored_.blocks()) {
+    if (stored.surface_points == 0) continue;
+    cache.trim();
+    if (const Block* b = readStored(key, unpack(key), cache))
+      forEachSurfaceVoxel(*b, neighboursOf(*b, &cache), emit);
   }
 }
 

@@ -207,6 +207,8 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
   stats.kept_keyframes_disk_mb =
       static_cast<double>(mapper.keptKeyframes().diskBytes()) / (1024.0 * 1024.0);
   stats.map_memory_mb = static_cast<double>(mapper.memoryBytes()) / (1024.0 * 1024.0);
+  stats.map_blocks_on_disk = mapper.blocksOnDisk();
+  stats.map_disk_mb = static_cast<double>(mapper.mapDiskBytes()) / (1024.0 * 1024.0);
   stats.place_database_mb = static_cast<double>(stats.place_bytes.load()) / (1024.0 * 1024.0);
   return exit_code;
 }

@@ -36,6 +36,7 @@ struct RunStats {
   std::atomic<std::uint64_t> keyframes{0};
   std::atomic<std::uint64_t> map_points{0};
   std::atomic<std::uint64_t> map_bytes{0};    // Mapper::memoryBytes(), after each keyframe
+  std::atomic<std::uint64_t> map_blocks_stored{0};  // TSDF blocks moved to disk (map.memory)
   std::atomic<std::uint64_t> place_bytes{0};  // loop closure's place database
   std::atomic<std::uint64_t> checkpoints_written{0};
   std::atomic<std::uint64_t> checkpoints_failed{0};
@@ -95,6 +96,9 @@ struct RunStats {
   // Kept keyframes whose images went to disk (beyond loop.keyframe_memory), and their bytes.
   std::uint64_t kept_keyframes_on_disk = 0;
   double kept_keyframes_disk_mb = 0.0;
+  // TSDF blocks on disk at the end (beyond map.memory), and their scratch files' size.
+  std::uint64_t map_blocks_on_disk = 0;
+  double map_disk_mb = 0.0;
   double place_database_mb = 0.0;  // loop closure's places (ORB features, dense references)
 
   double wall_seconds = 0.0;

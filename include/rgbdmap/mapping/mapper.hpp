@@ -94,6 +94,9 @@ class Mapper {
   // The TSDF's blocks and index, the kept keyframes' images, and while a pass runs the map it
   // began from.
   std::size_t memoryBytes() const;
+  // The TSDF's blocks on disk (beyond map.memory), and the bytes of their scratch files.
+  std::size_t blocksOnDisk() const;
+  std::uint64_t mapDiskBytes() const;
 
  private:
   Eigen::Isometry3d corrected(const PoseCorrections::Snapshot& correction, std::int64_t anchor,
@@ -122,6 +125,7 @@ class Mapper {
   double voxel_size_;
   std::uint32_t min_observations_;
   RefusionOptions refusion_;
+  std::size_t max_blocks_;  // in memory, by map.memory (0: no limit)
   const PoseCorrections* corrections_;
   VoxelMap map_;
   KeyframeStore store_;

@@ -3,17 +3,19 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rgbdmap {
 
 // A scratch file that byte strings are appended to and read back from: where the kept keyframes'
-// images go when they no longer fit in memory (KeyframeStore). It lies in the system's temporary
+// images (KeyframeStore) and the map's blocks (BlockStore) go when they no longer fit in memory,
+// `what` naming them in its messages. It lies in the system's temporary
 // folder (TMPDIR, else /tmp) and is unlinked as soon as it is made, so that no run, however it
 // ends, leaves one behind; the space is the system's again when the run exits.
 class SpillFile {
  public:
-  SpillFile() = default;
+  explicit SpillFile(std::string what = "keyframe images") : what_(std::move(what)) {}
   ~SpillFile();
   SpillFile(const SpillFile&) = delete;
   SpillFile& operator=(const SpillFile&) = delete;
@@ -32,6 +34,7 @@ class SpillFile {
  private:
   bool open(std::string& error);
 
+  std::string what_;
   int fd_ = -1;
   std::string folder_;
   std::atomic<std::uint64_t> end_{0};

@@ -9,26 +9,17 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "rgbdmap/base/chunked_vector.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
+#include "rgbdmap/mapping/block_store.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
+#include "rgbdmap/mapping/tsdf_voxel.hpp"
+#include "rgbdmap/mapping/voxel_key_hash.hpp"
 
 namespace rgbdmap {
-
-// Mixes all bits of a packed key: the identity hash std::hash gives integers puts neighbouring
-// blocks into neighbouring buckets, which overflows hopscotch neighbourhoods.
-struct VoxelKeyHash {
-  std::size_t operator()(std::uint64_t key) const {
-    key ^= key >> 33;
-    key *= 0xff51afd7ed558ccdULL;
-    key ^= key >> 33;
-    key *= 0xc4ceb9fe1a85ec53ULL;
-    key ^= key >> 33;
-    return static_cast<std::size_t>(key);
-  }
-};
 
 // A sparse truncated signed distance field: each voxel holds the weighted mean of the signed
 // distances along the line of sight to the surfaces measured through it (positive in front of
@@ -41,34 +32,7 @@ struct VoxelKeyHash {
 // whose |distance| is the smaller of the pair, moved onto the zero level along the gradient.
 class VoxelMap {
  public:
-  // 8 bytes: blocks are most of a long run's memory. The distance is kept in steps of 4 um
-  // (+-13 cm, wider than any band up to 5 m), the weight in steps of 1/2048 of a head-on
-  // measurement at 1 m, saturating at 32 of them: from there on each measurement moves the
-  // voxel by a fixed share (an average over the latest few dozen close views, which still lets a
-  // moved object go), and the 16-bit distance never stops taking it in.
-  struct Voxel {
-    static constexpr float kSdfStep = 4e-6f;  // m
-    static constexpr float kWeightStep = 1.0f / 2048;
-    static constexpr float kMaxWeight = 65535 * kWeightStep;
-
-    float sdf() const { return static_cast<float>(sdf_steps) * kSdfStep; }  // metres, truncated
-    float weight() const { return static_cast<float>(weight_steps) * kWeightStep; }
-    bool observed() const { return weight_steps > 0; }
-    // Stores both, rounded; an observed voxel keeps a weight above 0.
-    void set(float sdf, float weight) {
-      // Rounded by adding 0.5 to a value made positive first: no branch, no call.
-      const float s = std::min(std::max(sdf * (1.0f / kSdfStep), -32767.0f), 32767.0f);
-      sdf_steps = static_cast<std::int16_t>(static_cast<int>(s + 32768.5f) - 32768);
-      const float w = std::min(std::max(weight * (1.0f / kWeightStep) + 0.5f, 1.0f), 65535.0f);
-      weight_steps = static_cast<std::uint16_t>(static_cast<int>(w));
-    }
-
-    std::int16_t sdf_steps = 0;
-    std::uint16_t weight_steps = 0;  // sum of measurement weights; 0 = never observed
-    std::uint8_t r = 0, g = 0, b = 0;
-    std::uint8_t observations = 0;  // frames fused into this voxel, saturating at 255
-  };
-  static_assert(sizeof(Voxel) == 8, "voxels are 8 bytes");
+  using Voxel = TsdfVoxel;
   static constexpr int kBlockBits = 3;
   static constexpr int kBlockEdge = 1 << kBlockBits;  // voxels per block edge
   static constexpr int kBlockVoxels = kBlockEdge * kBlockEdge * kBlockEdge;
@@ -91,18 +55,19 @@ class VoxelMap {
 
   double voxelSize() const { return voxel_size_; }
   std::uint32_t minObservations() const { return min_observations_; }
-  // Blocks in use (pruned ones excluded).
+  // Blocks in memory (pruned ones and those on disk excluded).
   std::size_t blockCount() const { return blocks_.size() - free_.size(); }
   // Block indices run over [0, blockSlots()); a slot whose block was pruned is not in_use.
   std::size_t blockSlots() const { return blocks_.size(); }
+  // Memory of the blocks and indices (not the bytes on disk: storedBlocks()).
   std::size_t memoryBytes() const;
   // Points extract() writes. Counting is left until asked for: after each integration it would
   // revisit the blocks updated and their neighbours, about a tenth of the fusion time. With a
   // pool the blocks are counted on all its threads.
   std::size_t pointCount(WorkerPool* pool = nullptr);
 
-  // One coloured point per surface voxel, in a deterministic order (blocks in the order they
-  // were created).
+  // One coloured point per surface voxel, in a deterministic order (blocks in memory in the order
+  // they were created, then those on disk).
   void extract(pcl::PointCloud<pcl::PointXYZRGB>& cloud) const;
   // The same points, packed (PackedMapCloud: half the memory).
   void extract(std::vector<PackedMapPoint>& points) const;
@@ -142,6 +107,39 @@ class VoxelMap {
   void clear();
   // Hands back the memory of blocks no longer needed after clear() (a map that grew back smaller).
   void releaseUnused() { blocks_.releaseUnused(); }
+
+  // --- blocks out of memory ---
+  // Once more than `max_blocks` blocks are in memory, moves the least recently updated ones to
+  // disk (BlockStore) until a quarter of that is free again; blocks updated in the last
+  // `min_idle` integrations stay. A block on disk is still part of the map: extract(),
+  // pointCount() and meshes read it back, and it returns to memory when an integration reaches it
+  // or a block next to it (so that no block changes while a neighbour its surface depends on is
+  // on disk). Returns how many blocks went; none once the disk refused one (reported once).
+  std::size_t keepWithin(std::size_t max_blocks, std::uint64_t min_idle);
+  const BlockStore& storedBlocks() const { return stored_; }
+  // The coordinates of the blocks on disk within `radius` of `centre` (m), and some a little
+  // farther: they are found by the cells of 8x8x8 blocks they lie in. A view that sees through
+  // one (TsdfIntegrator) brings it back, as it updates those in memory.
+  std::vector<Eigen::Vector3i> storedNear(const Eigen::Vector3f& centre, float radius) const;
+  // Blocks read back from disk, for a while: each reader (a thread, an extraction) has its own.
+  // What find() gave stays valid until trim().
+  class BlockCache {
+   public:
+    void trim() {
+      if (blocks_.size() > kKeepBlocks) blocks_.clear();
+    }
+
+   private:
+    friend class VoxelMap;
+    static constexpr std::size_t kKeepBlocks = 1024;  // 4 MB
+    tsl::hopscotch_map<std::uint64_t, std::unique_ptr<Block>, VoxelKeyHash> blocks_;
+    std::vector<std::uint8_t> scratch_;
+  };
+  // The block with these block coordinates, in memory or read back into `cache`; nullptr where
+  // the map has none.
+  const Block* findBlock(const Eigen::Vector3i& block_coords, BlockCache& cache) const;
+  // The coordinates of every block, in memory (in index order) then on disk.
+  std::vector<Eigen::Vector3i> allBlockCoordinates() const;
   Block& block(std::uint32_t index) { return blocks_[index]; }
   const Block& block(std::uint32_t index) const { return blocks_[index]; }
   // Marks the working set and the blocks next to it (whose border voxels may have changed
@@ -157,11 +155,28 @@ class VoxelMap {
   static bool pack(const Eigen::Vector3i& coords, std::uint64_t& key);
 
  private:
-  // Frees a block's slot for a new one.
+  // A slot for a new block with this key, linked with its neighbours.
+  std::uint32_t place(std::uint64_t key, const Eigen::Vector3i& block_coords);
+  // Frees a block's slot for a new one: the block leaves the map (release) or goes to disk.
+  void unplace(std::uint32_t index);
   void release(std::uint32_t index);
-  // The 6 face neighbours of a block (-x, +x, -y, +y, -z, +z), nullptr where none.
+  // Writes a block to disk and frees its slot; false when the disk refuses.
+  bool store(std::uint32_t index, BlockCache& cache);
+  // Back from disk into a slot (touchBlock); returns its index.
+  std::uint32_t restore(std::uint64_t key, const Eigen::Vector3i& block_coords);
+  // A stored block, read into `cache`; nullptr where none is stored.
+  const Block* readStored(std::uint64_t key, const Eigen::Vector3i& block_coords,
+                          BlockCache& cache) const;
+  // Counts a block's surface points and updates the total.
+  void recount(Block& block, BlockCache* cache);
+  // Lists a block in memory for counting.
+  void markDue(std::uint32_t index);
+  // Counts again the blocks next to those that left the map (in memory: at the next count).
+  void recountAround(const std::vector<Eigen::Vector3i>& gone);
+  // The 6 face neighbours of a block (-x, +x, -y, +y, -z, +z), nullptr where none. Without a
+  // cache, those in memory only (the map has no blocks on disk).
   using Neighbours = std::array<const Block*, 6>;
-  Neighbours neighboursOf(const Block& block) const;
+  Neighbours neighboursOf(const Block& block, BlockCache* cache) const;
   // Links a new block with the blocks next to it, both ways.
   void link(std::uint32_t index, const Eigen::Vector3i& block_coords);
   // Calls emit(position, voxel) for each surface voxel of the block, in voxel order.
@@ -188,6 +203,11 @@ class VoxelMap {
   std::vector<std::uint32_t> touched_;
   std::vector<std::uint32_t> count_due_;                 // blocks with count_due set
   std::function<bool(const Eigen::Vector3i&)> allowed_;  // limitTo()
+  BlockStore stored_;  // blocks out of memory (keepWithin)
+  // Their keys by the cell of 8x8x8 blocks they lie in (storedNear()).
+  tsl::hopscotch_map<std::uint64_t, std::vector<std::uint64_t>, VoxelKeyHash> stored_cells_;
+  void noteStored(std::uint64_t key, bool stored);
+  bool store_refused_ = false;
 };
 
 }  // namespace rgbdmap
