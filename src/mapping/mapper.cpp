@@ -357,8 +357,7 @@ std::size_t Mapper::blocksOnDisk() const {
 }
 
 std::uint64_t Mapper::mapDiskBytes() const {
-  return map_.storedBlocks().fileBytes() +
-         (region_ ? region_->map.storedBlocks().fileBytes() : 0);
+  return map_.storedBlocks().fileBytes() + (region_ ? region_->map.storedBlocks().fileBytes() : 0);
 }
 
 std::shared_ptr<const MapCloud> Mapper::snapshot() const {

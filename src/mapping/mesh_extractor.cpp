@@ -129,8 +129,7 @@ class MeshBuilder {
   bool nearAround(std::uint32_t b) const {
     const Eigen::Vector3i coords = numbers_.coordinates[b];
     for (int i = 0; i < 8; ++i) {
-      const std::uint32_t at =
-          numbers_.find(coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2));
+      const std::uint32_t at = numbers_.find(coords + Eigen::Vector3i(i & 1, (i >> 1) & 1, i >> 2));
       if (at != UINT32_MAX && near_[at]) return true;
     }
     return false;

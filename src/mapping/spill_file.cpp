@@ -65,8 +65,8 @@ bool SpillFile::read(std::uint64_t offset, std::size_t size, std::vector<std::ui
   out.resize(size);
   const bool written = fd_ >= 0 && offset + size <= end_.load();
   if (!written || !whole(::pread, fd_, out.data(), size, offset)) {
-    error = folder_ + ": cannot read " + what_ + " back: " +
-            (!written ? "not written" : std::strerror(errno));
+    error = folder_ + ": cannot read " + what_ +
+            " back: " + (!written ? "not written" : std::strerror(errno));
     return false;
   }
   return true;

@@ -359,20 +359,24 @@ void VoxelMap::replaceRegion(const VoxelMap& from,
         touchExisting(restore(key, at));
     }
   };
+  // Every block of the region goes before any around it is touched: touching one brings its
+  // neighbours back from disk, which must not bring back the region's.
   std::vector<std::uint64_t> stored_in;
   for (const auto& [key, stored] : stored_.blocks())
     if (in(unpack(key))) stored_in.push_back(key);
+  std::vector<Eigen::Vector3i> gone;
   for (const std::uint64_t key : stored_in) {
     points_ -= stored_.find(key)->surface_points;
     stored_.erase(key);
     noteStored(key, false);
-    touchAround(unpack(key));
+    gone.push_back(unpack(key));
   }
   for (std::uint32_t i = 0; i < blocks_.size(); ++i) {
     if (!blocks_[i].in_use || !in(coordinates_[i])) continue;
-    touchAround(coordinates_[i]);
+    gone.push_back(coordinates_[i]);
     release(i);
   }
+  for (const Eigen::Vector3i& coords : gone) touchAround(coords);
   const auto take = [&](const Eigen::Vector3i& coords, const Block& b) {
     const std::uint32_t index = touchBlock(coords);
     if (index != kNone) blocks_[index].voxels = b.voxels;

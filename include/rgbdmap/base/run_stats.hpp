@@ -35,9 +35,9 @@ struct RunStats {
   std::atomic<std::uint64_t> frames_without_pose{0};
   std::atomic<std::uint64_t> keyframes{0};
   std::atomic<std::uint64_t> map_points{0};
-  std::atomic<std::uint64_t> map_bytes{0};    // Mapper::memoryBytes(), after each keyframe
+  std::atomic<std::uint64_t> map_bytes{0};          // Mapper::memoryBytes(), after each keyframe
   std::atomic<std::uint64_t> map_blocks_stored{0};  // TSDF blocks moved to disk (map.memory)
-  std::atomic<std::uint64_t> place_bytes{0};  // loop closure's place database
+  std::atomic<std::uint64_t> place_bytes{0};        // loop closure's place database
   std::atomic<std::uint64_t> checkpoints_written{0};
   std::atomic<std::uint64_t> checkpoints_failed{0};
   std::atomic<std::uint64_t> queue_depth{0};

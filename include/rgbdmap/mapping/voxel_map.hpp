@@ -203,7 +203,7 @@ class VoxelMap {
   std::vector<std::uint32_t> touched_;
   std::vector<std::uint32_t> count_due_;                 // blocks with count_due set
   std::function<bool(const Eigen::Vector3i&)> allowed_;  // limitTo()
-  BlockStore stored_;  // blocks out of memory (keepWithin)
+  BlockStore stored_;                                    // blocks out of memory (keepWithin)
   // Their keys by the cell of 8x8x8 blocks they lie in (storedNear()).
   tsl::hopscotch_map<std::uint64_t, std::vector<std::uint64_t>, VoxelKeyHash> stored_cells_;
   void noteStored(std::uint64_t key, bool stored);
