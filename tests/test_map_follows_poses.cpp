@@ -288,12 +288,14 @@ TEST(KeptKeyframes, ASpaceWalkedOnceBeyondTheBudgetIsKeptOnDiskAndStaysInTheMap)
 // A loop that moves part of the map fuses again only that part: a lap of 72 views round the room,
 // which a first loop moves whole (a whole pass), and whose first twelfth a second loop then moves
 // by 4 mm. The second pass fuses the cells those views see, before and after, from the keyframes
-// that see them (not the whole lap), and gives the map a whole pass gives, voxel for voxel.
+// that see them (not the whole lap), and gives the map a whole pass gives, voxel for voxel; so
+// does a map with most of its blocks on disk (map.memory).
 TEST(MapFollowsPoses, ALoopThatMovesPartOfTheMapFusesOnlyThatPartAgain) {
   Config config;
   const std::vector<Frame> lap = lapViews(config, 72);
-  auto mapLap = [&](double region_share, RunStats& stats) {
+  auto mapLap = [&](double region_share, double memory_mb, RunStats& stats) {
     config.refusion.region_share = region_share;
+    config.map.memory = memory_mb;
     PoseCorrections corrections;
     Mapper mapper(config.camera, config.filter, config.map, config.refusion, stats, &corrections);
     for (std::size_t i = 0; i < lap.size(); ++i) {
@@ -315,9 +317,11 @@ TEST(MapFollowsPoses, ALoopThatMovesPartOfTheMapFusesOnlyThatPartAgain) {
     mapper.settle();
     return mapper.snapshot();
   };
-  RunStats region_stats, whole_stats;
-  const auto region = mapLap(RefusionOptions().region_share, region_stats);
-  const auto whole = mapLap(0.0, whole_stats);
+  RunStats region_stats, whole_stats, bounded_stats;
+  const auto region = mapLap(RefusionOptions().region_share, 0.0, region_stats);
+  const auto whole = mapLap(0.0, 0.0, whole_stats);
+  // With 2 MB of blocks in memory (a tenth of the map), the rest on disk: the same map again.
+  const auto bounded = mapLap(RefusionOptions().region_share, 2.0, bounded_stats);
   const std::size_t second_pass = region_stats.keyframes_refused.load() - lap.size();
   std::cout << "second pass: " << second_pass << " of " << lap.size() << " keyframes; "
             << region->size() << " points, a whole pass " << whole->size() << "\n";
@@ -339,6 +343,18 @@ TEST(MapFollowsPoses, ALoopThatMovesPartOfTheMapFusesOnlyThatPartAgain) {
   }
   std::size_t same = 0;
   for (const auto& p : *region) {
+    std::uint64_t key;
+    ASSERT_TRUE(keys.keyFor(p.getVector3fMap(), key));
+    const auto it = by_voxel.find(key);
+    if (it != by_voxel.end() && it->second == p.getVector3fMap()) ++same;
+  }
+  EXPECT_EQ(same, whole->size());
+  std::cout << bounded_stats.map_blocks_stored.load() << " blocks went to disk with 2 MB\n";
+  EXPECT_GT(bounded_stats.map_blocks_stored.load(), 1000u);
+  EXPECT_EQ(bounded_stats.region_refusions.load(), 1u);
+  ASSERT_EQ(bounded->size(), whole->size());
+  same = 0;
+  for (const auto& p : *bounded) {
     std::uint64_t key;
     ASSERT_TRUE(keys.keyFor(p.getVector3fMap(), key));
     const auto it = by_voxel.find(key);
