@@ -15,7 +15,7 @@ struct MapOptions {
   int fusion_threads = 0;             // 0 = every core in a replay, 1 for a live camera
   // TSDF blocks in memory at most (MB); beyond it the least recently updated go to a scratch file
   // on disk and come back when the camera returns (VoxelMap::keepWithin). 0: no limit.
-  double memory = 128.0;
+  double memory = 96.0;
 };
 
 // With loop closure the map follows the pose graph (Mapper): fused keyframes are kept
