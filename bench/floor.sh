@@ -60,8 +60,9 @@ mkdir -p "$out"
 samples="$work/samples.txt"
 : >"$samples"
 start=$(date +%s.%N)
+# Odometry, as a camera without ground truth maps (a TUM folder's ground truth would be used).
 "$rgbdmap" --source "tum:$tum" --rate "$rate" --out "$out/map.pcd" --no-render --viewer none \
-  --stats "$out/stats.json" "${extra[@]}" >"$work/run.log" 2>&1 &
+  --set pose.source=odometry --stats "$out/stats.json" "${extra[@]}" >"$work/run.log" 2>&1 &
 pid=$!
 # Every half second: wall time, the newest frame's timestamp, RSS (kB), bytes on disk (the
 # output folder, and the scratch files the run holds open after unlinking them).
