@@ -3,15 +3,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <iostream>
 #include <iterator>
+#include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
 
+#include "rgbdmap/mapping/block_store.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/mesh_extractor.hpp"
 #include "rgbdmap/mapping/tsdf_integrator.hpp"
@@ -359,6 +363,51 @@ TEST(VoxelMap, BlocksBeyondItsMemoryGoToDiskAndTheMapWrittenStaysTheSame) {
   EXPECT_EQ(limited.storedBlocks().size(), 0u);
   EXPECT_EQ(limited.pointCount(), 0u);
   EXPECT_TRUE(extractOf(limited).empty());
+}
+
+// Blocks stored, taken back and stored again, as a camera walking to and fro makes them: the file
+// is written again without what was taken back before it grows past its bound, and every block
+// reads back as it was last stored.
+TEST(BlockStore, AFileOfBlocksTakenBackIsRewrittenAndEveryStoredBlockReadsBack) {
+  const std::uint64_t compact_above = 256 * 1024;
+  BlockStore store(compact_above);
+  std::mt19937 rng(3);
+  std::map<std::uint64_t, BlockStore::Voxels> expected;
+  std::uint64_t largest_file = 0;
+  std::string error;
+  for (int round = 0; round < 40; ++round) {
+    for (std::uint64_t key = 0; key < 64; ++key) {
+      if (round > 0 && key % 3 != static_cast<std::uint64_t>(round) % 3) continue;
+      BlockStore::Voxels voxels{};
+      for (int i = 0; i < BlockStore::kVoxels; ++i) {
+        if (rng() % 4 == 0) continue;  // never observed
+        voxels[i].set(static_cast<float>(static_cast<int>(rng() % 200) - 100) * 1e-4f,
+                      1.0f + static_cast<float>(rng() % 10));
+        voxels[i].r = static_cast<std::uint8_t>(rng());
+        voxels[i].observations = static_cast<std::uint8_t>(1 + rng() % 20);
+      }
+      store.erase(key);  // taken back into memory, then stored again
+      ASSERT_TRUE(store.put(key, voxels, static_cast<std::uint32_t>(key), round, error)) << error;
+      expected[key] = voxels;
+      largest_file = std::max(largest_file, store.fileBytes());
+    }
+  }
+  std::cout << store.size() << " blocks, " << store.storedBytes() / 1024 << " KB stored; the file "
+            << "grew to " << largest_file / 1024 << " KB at most, now " << store.fileBytes() / 1024
+            << " KB\n";
+  EXPECT_EQ(store.size(), 64u);
+  // Rewritten at least once (40 rounds wrote some 13 times what is stored), and never far past
+  // its bound (one block's bytes).
+  EXPECT_LT(largest_file, compact_above + 3 * store.storedBytes() + 8192);
+  std::vector<std::uint8_t> scratch;
+  for (const auto& [key, voxels] : expected) {
+    const BlockStore::Stored* stored = store.find(key);
+    ASSERT_NE(stored, nullptr);
+    EXPECT_EQ(stored->surface_points, key);
+    BlockStore::Voxels back;
+    ASSERT_TRUE(store.read(*stored, back, scratch, error)) << error;
+    EXPECT_EQ(std::memcmp(back.data(), voxels.data(), sizeof(voxels)), 0) << "block " << key;
+  }
 }
 
 }  // namespace

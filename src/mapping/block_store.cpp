@@ -7,9 +7,6 @@ namespace rgbdmap {
 namespace {
 
 constexpr std::size_t kMaskBytes = BlockStore::kVoxels / 8;
-// The file is written again without the blocks taken back once they are this many bytes and
-// twice those stored: at most 3x the stored bytes on disk, and rewrites far apart.
-constexpr std::uint64_t kCompactAboveBytes = 64ull << 20;
 
 void encode(const BlockStore::Voxels& voxels, std::vector<std::uint8_t>& out) {
   out.assign(kMaskBytes, 0);
@@ -40,7 +37,8 @@ bool decode(const std::vector<std::uint8_t>& in, BlockStore::Voxels& voxels) {
 
 bool BlockStore::put(std::uint64_t key, const Voxels& voxels, std::uint32_t surface_points,
                      std::uint64_t touched_in, std::string& error) {
-  if (file_ && file_->bytes() > kCompactAboveBytes + 2 * stored_bytes_ && !compact(error))
+  if (file_ && file_->bytes() - stored_bytes_ > compact_above_ + 2 * stored_bytes_ &&
+      !compact(error))
     return false;
   if (!file_) file_ = std::make_shared<SpillFile>("map blocks");
   encode(voxels, encoded_);

@@ -37,6 +37,10 @@ class BlockStore {
   };
   using Index = tsl::hopscotch_map<std::uint64_t, Stored, VoxelKeyHash>;
 
+  // The file is written again once the bytes taken back exceed `compact_above` plus twice those
+  // stored: it stays within `compact_above` and 3x the stored bytes, and rewrites are far apart.
+  explicit BlockStore(std::uint64_t compact_above = 64ull << 20) : compact_above_(compact_above) {}
+
   // Writes a block; false, with `error` naming the folder and what went wrong, when the disk
   // refuses (the block then stays where it was).
   bool put(std::uint64_t key, const Voxels& voxels, std::uint32_t surface_points,
@@ -74,6 +78,7 @@ class BlockStore {
   // Writes the stored blocks into a new file, leaving out what was taken back.
   bool compact(std::string& error);
 
+  std::uint64_t compact_above_;
   Index index_;
   // Shared by copies of the map (a copy appends after what either wrote).
   std::shared_ptr<SpillFile> file_;
