@@ -26,14 +26,9 @@ std::uint64_t KeyframeFootprint::key(const Eigen::Vector3i& cell) {
 
 Eigen::Vector3i KeyframeFootprint::unpack(std::uint64_t key) { return VoxelMap::unpack(key); }
 
-double KeyframeFootprint::cellSize(double voxel_size) {
-  return voxel_size * VoxelMap::kBlockEdge * kCellBlocks;
-}
-
 bool KeyframeFootprint::holds(const std::vector<std::uint64_t>& cells,
                               const Eigen::Vector3i& block) {
-  const Eigen::Vector3i cell(floorDiv(block.x()), floorDiv(block.y()), floorDiv(block.z()));
-  return std::binary_search(cells.begin(), cells.end(), key(cell));
+  return std::binary_search(cells.begin(), cells.end(), key(VoxelMap::cellOf(block)));
 }
 
 void KeyframeFootprint::sortUnique(std::vector<std::uint64_t>& cells) {
@@ -44,7 +39,7 @@ void KeyframeFootprint::sortUnique(std::vector<std::uint64_t>& cells) {
 KeyframeFootprint::KeyframeFootprint(const cv::Mat& depth, const CameraIntrinsics& camera,
                                      const Eigen::Isometry3d& pose, double voxel_size,
                                      double min_depth, double max_depth) {
-  const double cell = cellSize(voxel_size);
+  const double cell = VoxelMap::cellSize(voxel_size);
   const Eigen::Matrix3d rotation = pose.linear();
   for (int v = kStride / 2; v < depth.rows; v += kStride) {
     const float* row = depth.ptr<float>(v);
@@ -64,7 +59,7 @@ KeyframeFootprint::KeyframeFootprint(const cv::Mat& depth, const CameraIntrinsic
 
 KeyframeFootprint KeyframeFootprint::moved(const Eigen::Isometry3d& motion,
                                            double voxel_size) const {
-  const double cell = cellSize(voxel_size);
+  const double cell = VoxelMap::cellSize(voxel_size);
   KeyframeFootprint out;
   out.cells_.reserve(cells_.size());
   for (const std::uint64_t from : cells_) {

@@ -171,7 +171,7 @@ bool Mapper::lagsCorrections(const PoseCorrections::Snapshot& correction) {
 }
 
 double Mapper::regionVolume(std::size_t cells) const {
-  const double edge = KeyframeFootprint::cellSize(voxel_size_);
+  const double edge = VoxelMap::cellSize(voxel_size_);
   return std::round(static_cast<double>(cells) * edge * edge * edge);
 }
 

@@ -14,7 +14,6 @@ constexpr std::size_t kCountBlocksPerTask = 64;  // blocks counted per task
 constexpr int kBits = 21;
 constexpr std::int64_t kOffset = std::int64_t{1} << (kBits - 1);  // maps [-2^20, 2^20) to [0, 2^21)
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
-constexpr int kCellBits = 3;  // blocks on disk are found by cells of 8x8x8 blocks (storedNear)
 
 // A surface voxel's point, for either point type (pcl::PointXYZRGB or PackedMapPoint).
 template <typename Point>
@@ -234,7 +233,7 @@ bool VoxelMap::store(std::uint32_t index, BlockCache& cache) {
 
 void VoxelMap::noteStored(std::uint64_t key, bool stored) {
   std::uint64_t cell;
-  pack(unpack(key).unaryExpr([](int c) { return c >> kCellBits; }), cell);
+  pack(cellOf(unpack(key)), cell);
   std::vector<std::uint64_t>& keys = stored_cells_[cell];
   if (stored) {
     keys.push_back(key);
@@ -251,7 +250,7 @@ void VoxelMap::noteStored(std::uint64_t key, bool stored) {
 std::vector<Eigen::Vector3i> VoxelMap::storedNear(const Eigen::Vector3f& centre,
                                                   float radius) const {
   std::vector<Eigen::Vector3i> near;
-  const float cell_edge = static_cast<float>(voxel_size_) * kBlockEdge * (1 << kCellBits);
+  const float cell_edge = static_cast<float>(cellSize(voxel_size_));
   const float reach = radius + 0.5f * std::sqrt(3.0f) * cell_edge;
   for (const auto& [cell, keys] : stored_cells_) {
     const Eigen::Vector3f middle =

@@ -17,6 +17,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/image_file.hpp"
 #include "rgbdmap/base/tum_pose_line.hpp"
+#include "rgbdmap/base/voxel_key_hash.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -75,19 +76,6 @@ void validate(const SyntheticSequenceOptions& o) {
   require(o.surface_voxel > 0.0, "surface_voxel must be positive");
   require(o.png_compression >= 0 && o.png_compression <= 9, "png_compression must be 0..9");
 }
-
-// std::hash of an integer is the identity; packed voxel keys need their bits mixed or the
-// hopscotch map's neighbourhoods overflow (the keys differ mostly in their high bits).
-struct VoxelKeyHash {
-  std::size_t operator()(std::uint64_t x) const {
-    x ^= x >> 33;
-    x *= 0xFF51AFD7ED558CCDull;
-    x ^= x >> 33;
-    x *= 0xC4CEB9FE1A85EC53ull;
-    x ^= x >> 33;
-    return static_cast<std::size_t>(x);
-  }
-};
 
 // visible_surface.pcd: the first exact hit that falls into each voxel (a point on the surface,
 // where a voxel centroid would sit off the surface at edges and on curves).

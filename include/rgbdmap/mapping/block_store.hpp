@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "rgbdmap/base/voxel_key_hash.hpp"
 #include "rgbdmap/mapping/spill_file.hpp"
 #include "rgbdmap/mapping/tsdf_voxel.hpp"
-#include "rgbdmap/mapping/voxel_key_hash.hpp"
 
 namespace rgbdmap {
 

@@ -9,15 +9,13 @@
 
 namespace rgbdmap {
 
-// Where a keyframe's surfaces lie in the map, coarsely: the cells of kCellBlocks^3 TSDF blocks
-// (0.64 m at 1 cm voxels) that its depth, within the fused range, falls in. A pass after a loop
-// (Mapper) re-fuses only the cells the keyframes it moved saw, before and after the move, from the
-// keyframes that saw them or the cells next to them (a TSDF band and a voxel's neighbours reach a
-// few centimetres past a surface, never a cell).
+// Where a keyframe's surfaces lie in the map, coarsely: the cells of the voxel map
+// (VoxelMap::cellOf, 0.64 m at 1 cm voxels) that its depth, within the fused range, falls in. A
+// pass after a loop (Mapper) re-fuses only the cells the keyframes it moved saw, before and after
+// the move, from the keyframes that saw them or the cells next to them (a TSDF band and a voxel's
+// neighbours reach a few centimetres past a surface, never a cell).
 class KeyframeFootprint {
  public:
-  static constexpr int kCellBlocks = 8;
-
   KeyframeFootprint() = default;
   // From every kStride-th pixel of `depth` (metres, 0: none) in [min_depth, max_depth], seen from
   // `pose`.
@@ -25,8 +23,6 @@ class KeyframeFootprint {
                     const Eigen::Isometry3d& pose, double voxel_size, double min_depth,
                     double max_depth);
 
-  // The edge of a cell (m).
-  static double cellSize(double voxel_size);
   // Whether a TSDF block (block coordinates) lies in one of `cells` (sorted).
   static bool holds(const std::vector<std::uint64_t>& cells, const Eigen::Vector3i& block);
   // Sorts cell keys and keeps each once.
@@ -45,9 +41,6 @@ class KeyframeFootprint {
   static constexpr int kStride = 8;  // pixels
 
  private:
-  static int floorDiv(int b) {
-    return b >= 0 ? b / kCellBlocks : -((-b + kCellBlocks - 1) / kCellBlocks);
-  }
   static std::uint64_t key(const Eigen::Vector3i& cell);
   static Eigen::Vector3i unpack(std::uint64_t key);
 

@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "rgbdmap/base/chunked_vector.hpp"
+#include "rgbdmap/base/voxel_key_hash.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/mapping/block_store.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 #include "rgbdmap/mapping/tsdf_voxel.hpp"
-#include "rgbdmap/mapping/voxel_key_hash.hpp"
 
 namespace rgbdmap {
 
@@ -37,6 +37,14 @@ class VoxelMap {
   static constexpr int kBlockEdge = 1 << kBlockBits;  // voxels per block edge
   static constexpr int kBlockVoxels = kBlockEdge * kBlockEdge * kBlockEdge;
   static constexpr std::uint32_t kNone = UINT32_MAX;
+  // Coarse cells of kCellBlocks^3 blocks (0.64 m at 1 cm voxels): where blocks on disk are looked
+  // for (storedNear()), and what a keyframe's footprint lists (KeyframeFootprint).
+  static constexpr int kCellBits = 3;
+  static constexpr int kCellBlocks = 1 << kCellBits;
+  static Eigen::Vector3i cellOf(const Eigen::Vector3i& block) {
+    return block.unaryExpr([](int c) { return c >> kCellBits; });  // rounds down: -1 -> -1
+  }
+  static double cellSize(double voxel_size) { return voxel_size * kBlockEdge * kCellBlocks; }
   struct Block {
     Eigen::Vector3i origin = Eigen::Vector3i::Zero();  // voxel coordinates of its first voxel
     std::array<Voxel, kBlockVoxels> voxels;            // x fastest, then y, then z
