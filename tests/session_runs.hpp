@@ -25,8 +25,11 @@ const Session& mappedSession(const std::string& tum_name);
 struct SessionRun {
   int code = 0;
   std::string log, stats;  // the output, and --stats' JSON (checked to parse)
-  Trajectory trajectory;   // OUT_trajectory.txt (every frame)
+  Trajectory trajectory;   // OUT_trajectory.txt (every frame), in time order
 };
+// A TUM trajectory file whose runs need not be in time order (continuing a saved run of a
+// sequence recorded later), in time order.
+Trajectory loadAnyOrder(const std::string& path);
 // `rgbdmap --localise session` over `sequence` (lossless), its files named after `out` (no
 // extension).
 SessionRun localise(const std::string& sequence, const std::string& session,

@@ -112,6 +112,22 @@ TEST(SessionFile, HoldsTheRunsGraphPlacesAndKeyframeImages) {
     }
   ASSERT_GT(compared, 5000u);
   EXPECT_GE(static_cast<double>(within), 0.99 * compared);
+
+  // The run's trajectories, as tracked with their anchors: at the graph's poses they are the
+  // files the run wrote beside its map (a run that continues the session writes them again).
+  for (const auto& [poses, file] : {std::make_pair(&session.frames, "/map_trajectory.txt"),
+                                    std::make_pair(&session.fused, "/map_keyframes.txt")}) {
+    const Trajectory written = Trajectory::load(dir + file);
+    const Trajectory resolved = resolvedTrajectory(session, *poses);
+    ASSERT_EQ(resolved.size(), written.size()) << file;
+    ASSERT_GT(resolved.size(), 4u) << file;
+    for (std::size_t i = 0; i < resolved.size(); ++i) {
+      EXPECT_NEAR(resolved[i].timestamp, written[i].timestamp, 1e-6) << file;
+      EXPECT_LT((resolved[i].pose.translation() - written[i].pose.translation()).norm(), 1e-6)
+          << file;
+    }
+  }
+  EXPECT_EQ(session.frames.size(), lines(dir + "/map_trajectory.txt"));
 }
 
 TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
@@ -121,6 +137,11 @@ TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
   ASSERT_TRUE(writeSession(readSession(original), again, error)) << error;
   for (const char* name : {"graph.bin", "places.bin", "keyframes.bin", "config.yaml"})
     EXPECT_EQ(test::readFile(original + "/" + name), test::readFile(again + "/" + name)) << name;
+  // (The trajectories' quaternions are normalised when read: the last digit may change.)
+  for (const char* name : {"frames.anchored", "keyframes.anchored"}) {
+    EXPECT_GT(lines(original + "/" + name), 4u) << name;
+    EXPECT_EQ(lines(original + "/" + name), lines(again + "/" + name)) << name;
+  }
   // Written over: the new folder takes the old one's place, nothing is left beside it.
   ASSERT_TRUE(writeSession(readSession(original), again, error)) << error;
   std::size_t beside = 0;
@@ -178,6 +199,14 @@ TEST(SessionFile, TruncatedCorruptOrOtherVersionIsRefusedNamingTheFile) {
     const std::string message = refusal(s);
     EXPECT_NE(message.find(s + "/session.yaml: session format version 9"), std::string::npos)
         << message;
+  }
+  {
+    const std::string s = copySession(dir, "trajectory.session");
+    std::string frames = test::readFile(s + "/frames.anchored");
+    frames.insert(frames.find('\n') + 1, "1305031102.1 0 0 nan 0 0 0 1 3\n");
+    std::ofstream(s + "/frames.anchored") << frames;
+    EXPECT_NE(refusal(s).find(s + "/frames.anchored: line 2: corrupt"), std::string::npos)
+        << refusal(s);
   }
   {
     const std::string s = copySession(dir, "missing.session");

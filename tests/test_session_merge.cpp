@@ -8,6 +8,7 @@
 #include <string>
 
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/sessions/session_file.hpp"
 #include "session_runs.hpp"
 #include "test_support.hpp"
 
@@ -54,6 +55,23 @@ TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
 
   // The merged map has both runs' keyframes.
   EXPECT_GT(test::loadMap(dir + "/merged.pcd").size(), test::loadMap(dir + "/rpy.pcd").size());
+
+  // One trajectory beside the merged map, at the merged graph's poses: the graph's keyframes and
+  // every frame both runs tracked (the room's left out), scored in one alignment.
+  const Trajectory truth =
+      test::merged(rpy_truth, Trajectory::load(test::tumDir(kXyz) + "/groundtruth.txt"));
+  const Trajectory keyframes = Trajectory::load(dir + "/merged_keyframes.txt");
+  const Trajectory frames = Trajectory::load(dir + "/merged_trajectory.txt");
+  EXPECT_EQ(frames.size(), Trajectory::load(dir + "/rpy_trajectory.txt").size() +
+                               Trajectory::load(dir + "/xyz_trajectory.txt").size());
+  EXPECT_EQ(keyframes.size(), readSession(dir + "/rpy.session").graph.keyframes.size() +
+                                  readSession(dir + "/xyz.session").graph.keyframes.size());
+  const double graph = absoluteTrajectoryError(keyframes, truth).translation.rmse;
+  const double every_frame = absoluteTrajectoryError(frames, truth).translation.rmse;
+  std::cout << "the merged graph's " << keyframes.size() << " keyframes: ATE " << graph * 100
+            << " cm; its " << frames.size() << " frames: " << every_frame * 100 << " cm\n";
+  EXPECT_LT(graph, 0.035);
+  EXPECT_LT(every_frame, 0.035);
 }
 
 TEST(SessionMerge, OneSessionOrABrokenOneIsRefused) {

@@ -69,9 +69,9 @@ int merge(const std::vector<std::string>& paths, const std::string& out) {
     transforms << paths[i] << " " << tumPose(p.transform) << "\n";
     if (i == 0) continue;
     spdlog::info(
-        "{}: placed by {} agreeing places (most of them {}'s): its frame {:.3f} m and {:.1f} "
-        "degrees from the first session's",
-        paths[i], p.links, paths[static_cast<std::size_t>(p.linked_to)],
+        "{}: placed by {} agreeing places (most of them {}'s), tied by {} places in all: its "
+        "frame {:.3f} m and {:.1f} degrees from the first session's",
+        paths[i], p.placing, paths[static_cast<std::size_t>(p.linked_to)], p.links,
         p.transform.translation().norm(), rotationAngle(p.transform) * kDegreesPerRadian);
   }
   if (!transforms) throw InputError(stem(out) + "_transforms.txt: cannot write");
@@ -86,11 +86,17 @@ int merge(const std::vector<std::string>& paths, const std::string& out) {
   if (!writePcdAtomically(*cloud, out, error)) throw InputError(error);
   std::uint64_t bytes = 0;
   if (!writeSession(merged, sessionPathOf(out), error, &bytes)) throw InputError(error);
+  // One trajectory for the merged map: the graph's keyframes, and every frame the runs tracked
+  // (sessions that kept them), at the merged graph's poses.
+  graphTrajectory(merged).save(stem(out) + "_keyframes.txt");
+  const bool frames = !merged.frames.empty();
+  if (frames) resolvedTrajectory(merged, merged.frames).save(stem(out) + "_trajectory.txt");
   spdlog::info(
       "merged {} of {} sessions: {} points written to {}, the session ({:.1f} MB) to {}, the "
-      "transforms to {} ({:.1f} s)",
+      "transforms to {}, the keyframes' poses to {}{} ({:.1f} s)",
       placed, sessions.size(), cloud->size(), out, static_cast<double>(bytes) / (1024.0 * 1024.0),
-      sessionPathOf(out), stem(out) + "_transforms.txt", secondsSince(start));
+      sessionPathOf(out), stem(out) + "_transforms.txt", stem(out) + "_keyframes.txt",
+      frames ? ", every frame's to " + stem(out) + "_trajectory.txt" : "", secondsSince(start));
   // Nothing joined: the sessions share no place at all.
   return placed > 1 ? 0 : 1;
 }

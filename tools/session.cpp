@@ -53,12 +53,7 @@ void addSessionCommand(CLI::App& app, Command& selected) {
           s.kept_keyframes, session.camera.width, session.camera.height, session.camera.fx,
           session.camera.fy, session.camera.cx, session.camera.cy);
       if (!trajectory->empty()) {
-        std::vector<StampedPose> poses;
-        for (const auto& k : session.graph.keyframes) poses.push_back({k.timestamp, k.pose});
-        std::stable_sort(
-            poses.begin(), poses.end(),
-            [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
-        Trajectory(std::move(poses)).save(*trajectory);
+        graphTrajectory(session).save(*trajectory);
         std::printf("trajectory: %zu keyframe poses written to %s\n",
                     session.graph.keyframes.size(), trajectory->c_str());
       }

@@ -110,7 +110,17 @@ bool save(FleetMerger& merger, const Settings& s, std::string& message) {
     message = error;
     return false;
   }
-  message = s.out + " (" + std::to_string(map.size()) + " points) and " + session_path;
+  // The merged graph's keyframe trajectory beside the map: every robot's keyframes, one frame.
+  const std::string keyframes =
+      (std::filesystem::path(s.out).replace_extension("").string()) + "_keyframes.txt";
+  try {
+    graphTrajectory(session).save(keyframes);
+  } catch (const std::exception& e) {
+    message = e.what();
+    return false;
+  }
+  message =
+      s.out + " (" + std::to_string(map.size()) + " points), " + session_path + " and " + keyframes;
   return true;
 }
 

@@ -19,8 +19,7 @@ namespace {
 // One TUM line, with the anchor appended for the spool.
 void formatLine(std::string& out, double timestamp, const Eigen::Isometry3d& pose,
                 const std::int64_t* anchor) {
-  out += tumPoseLine(timestamp, pose);
-  if (anchor) out += ' ' + std::to_string(*anchor);
+  out += anchor ? spoolLine({timestamp, pose, *anchor}) : tumPoseLine(timestamp, pose);
   out.push_back('\n');
 }
 
@@ -29,6 +28,28 @@ std::string failure(const std::string& file, const char* what) {
 }
 
 }  // namespace
+
+std::string spoolLine(const AnchoredPose& pose) {
+  return tumPoseLine(pose.timestamp, pose.pose) + ' ' + std::to_string(pose.anchor);
+}
+
+bool parseSpoolLine(const std::string& line, AnchoredPose& pose) {
+  std::istringstream fields(line);
+  Eigen::Vector3d t;
+  Eigen::Quaterniond q;
+  long long anchor;
+  if (!(fields >> pose.timestamp >> t.x() >> t.y() >> t.z() >> q.x() >> q.y() >> q.z() >> q.w() >>
+        anchor) ||
+      !t.allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-6)
+    return false;
+  std::string rest;
+  if (fields >> rest) return false;
+  pose.pose = Eigen::Isometry3d::Identity();
+  pose.pose.linear() = q.normalized().toRotationMatrix();
+  pose.pose.translation() = t;
+  pose.anchor = anchor;
+  return true;
+}
 
 std::string spoolFileOf(const std::string& trajectory_path) {
   return trajectory_path + ".anchored";
@@ -78,19 +99,13 @@ bool TrajectoryStream::rewriteFromSpool(std::string& error) {
         // In pieces: the spool of a long run is large and only the file should hold it whole.
         std::string text = kTumPoseHeader;
         std::string line;
+        AnchoredPose p;
         while (std::getline(in, line)) {
-          std::istringstream fields(line);
-          double timestamp;
-          Eigen::Vector3d t;
-          Eigen::Quaterniond q;
-          long long anchor;
-          if (!(fields >> timestamp >> t.x() >> t.y() >> t.z() >> q.x() >> q.y() >> q.z() >>
-                q.w() >> anchor))
-            continue;  // a line cut short by a crash before this run's first persist
-          Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-          pose.linear() = q.normalized().toRotationMatrix();
-          pose.translation() = t;
-          formatLine(text, timestamp, snapshot.apply(anchor, pose), nullptr);
+          if (!parseSpoolLine(line, p)) continue;  // cut short by a crash before a first persist
+          // Continuing, until the run joins the saved map: the saved runs' poses (anchored below
+          // the run's first keyframe) are in another frame than the run's own; its own only.
+          if (!snapshot.joined && p.anchor >= 0 && p.anchor < snapshot.first_own) continue;
+          formatLine(text, p.timestamp, snapshot.apply(p.anchor, p.pose), nullptr);
           if (text.size() > (1u << 16)) {
             if (!writeAll(fd, text.data(), text.size())) return false;
             text.clear();

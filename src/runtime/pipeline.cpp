@@ -121,7 +121,8 @@ CheckpointWriter::OctomapFile octomapFile(const PipelineOutputs& outputs, const 
 // checkpoint.session=false): the kept keyframes taken on the fusion thread (their images shared,
 // not copied); the graph and places as they are when the writer gets to them.
 CheckpointWriter::SessionFile sessionFile(const PipelineOutputs& outputs, const Mapper& mapper,
-                                          const LoopCloser* loop_closer, const Config& config,
+                                          const LoopCloser* loop_closer,
+                                          const Trajectories& trajectories, const Config& config,
                                           const std::string& configuration) {
   if (outputs.session_path.empty() || !loop_closer || !config.checkpoint.session) return {};
   // Continuing, until the run joins the saved map: its graph would hold two unrelated frames.
@@ -132,6 +133,9 @@ CheckpointWriter::SessionFile sessionFile(const PipelineOutputs& outputs, const 
   session->configuration = configuration;
   session->live_graph = loop_closer;
   session->keyframes = mapper.keptKeyframes().entries();
+  // The writer persists the trajectories before the session: their spools are whole by then.
+  if (trajectories.frames) session->frames_spool = trajectories.frames->spool();
+  if (trajectories.keyframes) session->fused_spool = trajectories.keyframes->spool();
   return {std::move(session), outputs.session_path};
 }
 
@@ -233,6 +237,7 @@ int Pipeline::run(RunControl& control) {
   stats_.localising = !mode_->maps();
   GraphAttachment graph_attachment(outputs_.publisher, loop.loop_closer.get(), camera);
   const Trajectories trajectories = trajectoriesOf(outputs_, loop.corrections.get());
+  mode_->startTrajectories(trajectories.frames.get(), trajectories.keyframes.get());
   FrameTracker tracker(
       mode_->keyframeSelector(config),
       makePoseProvider(config.pose, config.tracking, config.camera, config.filter.min_depth,
@@ -267,10 +272,10 @@ int Pipeline::run(RunControl& control) {
   // writes the trajectories recorded so far beside it.
   auto checkpoint = [&] {
     fusion.request(MapRequest::kCheckpoint, [&](const Mapper& m) {
-      writer.submit(m.snapshot(), outputs_.map_path, trajectories.files,
-                    meshFile(outputs_, m, stats_), gridFile(outputs_, m, config),
-                    octomapFile(outputs_, m),
-                    sessionFile(outputs_, m, loop.loop_closer.get(), config, configuration));
+      writer.submit(
+          m.snapshot(), outputs_.map_path, trajectories.files, meshFile(outputs_, m, stats_),
+          gridFile(outputs_, m, config), octomapFile(outputs_, m),
+          sessionFile(outputs_, m, loop.loop_closer.get(), trajectories, config, configuration));
     });
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
@@ -299,7 +304,8 @@ int Pipeline::run(RunControl& control) {
   mapper.settle();
   int exit_code = saveFinalMap(
       mapper, writer, trajectories.files, publication, outputs_, config,
-      sessionFile(outputs_, mapper, loop.loop_closer.get(), config, configuration), stats_);
+      sessionFile(outputs_, mapper, loop.loop_closer.get(), trajectories, config, configuration),
+      stats_);
   // No keyframe comes any more and the session is saved: the places can go.
   graph_attachment.release();
   if (loop.loop_closer) loop.loop_closer->forgetPlaces();

@@ -114,6 +114,8 @@ KeyframeSelector RunMode::keyframeSelector(const Config& config) const {
 
 void RunMode::startMap(Mapper&) const {}
 
+void RunMode::startTrajectories(PoseSink*, PoseSink*) const {}
+
 std::string MapFromNothing::describe(const std::string& poses, const Config& config,
                                      const LoopThread& loop) const {
   return fmt::format("poses: {}, keyframes: {}, loop closure: {}", poses,
@@ -136,6 +138,18 @@ LoopThread ContinueSession::startLoopThread(const Config& config, RunStats& stat
 }
 
 void ContinueSession::startMap(Mapper& mapper) const { mapper.continueFrom(saved()->keyframes); }
+
+void ContinueSession::startTrajectories(PoseSink* frames, PoseSink* keyframes) const {
+  for (const auto& [sink, poses] :
+       {std::make_pair(frames, &saved()->frames), std::make_pair(keyframes, &saved()->fused)}) {
+    if (!sink) continue;
+    for (const AnchoredPose& p : *poses) {
+      // (Anchored within the saved graph: the ids after it are this run's keyframes.)
+      const AnchoredPose a = anchoredInGraph(*saved(), p);
+      sink->record(a.timestamp, a.pose, a.anchor);
+    }
+  }
+}
 
 std::string ContinueSession::describe(const std::string& poses, const Config& config,
                                       const LoopThread&) const {

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -14,6 +15,7 @@
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/file_io.hpp"
 #include "rgbdmap/map_files/atomic_write.hpp"
 #include "rgbdmap/sessions/session_records.hpp"
 
@@ -29,6 +31,8 @@ constexpr const char* kGraphFile = "graph.bin";
 constexpr const char* kPlacesFile = "places.bin";
 constexpr const char* kKeyframesFile = "keyframes.bin";
 constexpr const char* kStreamsFile = "streams.bin";
+constexpr const char* kFramesFile = "frames.anchored";
+constexpr const char* kFusedFile = "keyframes.anchored";
 constexpr char kGraphKind[5] = "GRPH";
 constexpr char kPlacesKind[5] = "PLCS";
 constexpr char kKeyframesKind[5] = "KFRM";
@@ -208,6 +212,56 @@ void readStreams(BinaryReader in, Session& s) {
   if (!in.atEnd()) in.fail("corrupt (bytes after the streams)");
 }
 
+// A trajectory of the session: copied from the run's spool while it runs (none yet: empty),
+// else written from `poses`.
+bool writeTrajectory(const std::string& path, const std::vector<AnchoredPose>& poses,
+                     const std::string& spool, std::string& error) {
+  return writeFileAtomically(
+      path,
+      [&](int fd) {
+        std::string text;
+        if (!spool.empty()) {
+          std::ifstream in(spool, std::ios::binary);
+          if (!in && fs::exists(spool)) return false;
+          std::vector<char> piece(1 << 16);
+          while (in) {
+            in.read(piece.data(), static_cast<std::streamsize>(piece.size()));
+            if (!writeAll(fd, piece.data(), static_cast<std::size_t>(in.gcount()))) return false;
+          }
+          return true;
+        }
+        for (const AnchoredPose& p : poses) {
+          text += spoolLine(p);
+          text.push_back('\n');
+          if (text.size() > (1u << 16)) {
+            if (!writeAll(fd, text.data(), text.size())) return false;
+            text.clear();
+          }
+        }
+        return writeAll(fd, text.data(), text.size());
+      },
+      error);
+}
+
+// Reads a trajectory of the session (none in a session written before they were kept).
+std::vector<AnchoredPose> readTrajectory(const std::string& path) {
+  std::vector<AnchoredPose> poses;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return poses;
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
+  std::size_t number = 0;
+  AnchoredPose p;
+  for (std::string line; std::getline(in, line);) {
+    ++number;
+    if (!parseSpoolLine(line, p) || p.anchor < -1)
+      throw InputError(path + ": line " + std::to_string(number) +
+                       ": corrupt (not \"timestamp tx ty tz qx qy qz qw anchor\")");
+    poses.push_back(p);
+  }
+  return poses;
+}
+
 std::string summaryText(const Session& s, const SessionSummary& summary) {
   std::ostringstream out;
   out << "# rgbdmap session (docs/sessions.md): what a later run needs to go on from this map\n"
@@ -310,6 +364,8 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
       record(kGraphFile, kGraphKind, writeGraph) && record(kPlacesFile, kPlacesKind, writePlaces) &&
       record(kKeyframesFile, kKeyframesKind, writeKeyframes) &&
       (session.streams.empty() || record(kStreamsFile, kStreamsKind, writeStreams)) &&
+      writeTrajectory(in(kFramesFile), session.frames, session.frames_spool, error) &&
+      writeTrajectory(in(kFusedFile), session.fused, session.fused_spool, error) &&
       writeBytesAtomically(in(kConfigFile), session.configuration, error) &&
       writeBytesAtomically(in(kSummaryFile), summaryText(session, summary), error);
   if (!written) {
@@ -354,6 +410,8 @@ Session readSession(const std::string& path) {
   readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
   if (fs::exists(in(kStreamsFile), ec))
     readStreams(openRecord(in(kStreamsFile), kStreamsKind, Session::kFormatVersion), session);
+  session.frames = readTrajectory(in(kFramesFile));
+  session.fused = readTrajectory(in(kFusedFile));
   return session;
 }
 
@@ -363,6 +421,43 @@ PoseCorrections::Table correctionsOf(const Session& session) {
   for (const LoopCloser::Saved::Keyframe& k : session.graph.keyframes)
     table.push_back(k.pose * k.odometry.inverse());
   return table;
+}
+
+AnchoredPose anchoredInGraph(const Session& session, AnchoredPose pose) {
+  const auto& graph = session.graph.keyframes;
+  if (graph.empty()) return pose;
+  if (pose.anchor < 0) {
+    pose.pose = graph.front().odometry * graph.front().pose.inverse() * pose.pose;
+    pose.anchor = 0;
+  }
+  pose.anchor = std::min<std::int64_t>(pose.anchor, static_cast<std::int64_t>(graph.size()) - 1);
+  return pose;
+}
+
+namespace {
+Trajectory inTimeOrder(std::vector<StampedPose> poses) {
+  std::stable_sort(poses.begin(), poses.end(), [](const StampedPose& a, const StampedPose& b) {
+    return a.timestamp < b.timestamp;
+  });
+  return Trajectory(std::move(poses));
+}
+}  // namespace
+
+Trajectory graphTrajectory(const Session& session) {
+  std::vector<StampedPose> poses;
+  for (const auto& k : session.graph.keyframes) poses.push_back({k.timestamp, k.pose});
+  return inTimeOrder(std::move(poses));
+}
+
+Trajectory resolvedTrajectory(const Session& session, const std::vector<AnchoredPose>& poses) {
+  std::vector<StampedPose> resolved;
+  if (session.graph.keyframes.empty()) return Trajectory(resolved);
+  const PoseCorrections::Table corrections = correctionsOf(session);
+  for (const AnchoredPose& p : poses) {
+    const AnchoredPose a = anchoredInGraph(session, p);
+    resolved.push_back({a.timestamp, corrections[static_cast<std::size_t>(a.anchor)] * a.pose});
+  }
+  return inTimeOrder(std::move(resolved));
 }
 
 void fuseSession(const Session& session, PoseCorrections& corrections, Mapper& mapper) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <limits>
 #include <map>
 
 #include "rgbdmap/mapping/keyframe_store.hpp"
@@ -182,42 +183,89 @@ std::optional<std::vector<SessionMerger::Match>> SessionMerger::agreeing(
   return best;
 }
 
-void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
-                           const Session& session, const std::vector<Match>& links) const {
+PoseGraph::Edge SessionMerger::linkEdge(const Match& m, std::size_t offset) const {
+  PoseGraph::Edge e;
+  e.from = m.target;
+  e.to = static_cast<int>(offset) + m.node;
+  e.setMeasurement(m.measurement);
+  e.setSqrtInformation(PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels));
+  e.loop = true;
+  return e;
+}
+
+SessionMerger::Joined SessionMerger::join(const Session& merged, const Session& session,
+                                          const std::vector<Match>& placing,
+                                          const std::vector<Match>& found) const {
   const std::size_t offset = merged.graph.keyframes.size();
   const std::size_t count = session.graph.keyframes.size();
-  const auto id = [offset](int node) { return static_cast<int>(offset) + node; };
-  // A loop edge from the merged keyframe whose place was found to the session's keyframe.
-  const auto linkEdge = [&](const Match& m) {
-    PoseGraph::Edge e;
-    e.from = m.target;
-    e.to = id(m.node);
-    e.setMeasurement(m.measurement);
-    e.setSqrtInformation(PoseGraph::sqrtInformation(m.information * settings_.loop.edge_pixels));
-    e.loop = true;
-    return e;
-  };
-  std::vector<Eigen::Isometry3d> poses;
-  if (links.empty()) {  // the first session: the merged frame is its own
-    for (const auto& k : session.graph.keyframes) poses.push_back(k.pose);
-  } else {
-    // One graph: the placed keyframes held, this session's free, started where the
-    // best-supported placement puts them.
-    const Match& start =
-        *std::max_element(links.begin(), links.end(),
-                          [](const Match& a, const Match& b) { return a.inliers < b.inliers; });
-    PoseGraph graph;
+  const int first_free = static_cast<int>(offset);
+  // Started where the best-supported placement puts the session; the placed keyframes held.
+  const Match& start =
+      *std::max_element(placing.begin(), placing.end(),
+                        [](const Match& a, const Match& b) { return a.inliers < b.inliers; });
+  PoseGraph graph;
+  const auto optimise = [&](const std::vector<Match>& links) {
+    graph = PoseGraph();
     for (const auto& k : merged.graph.keyframes) graph.addNode(k.pose);
     for (const auto& k : session.graph.keyframes) graph.addNode(start.transform * k.pose);
     for (PoseGraph::Edge e : session.graph.edges) {
-      e.from = id(e.from);
-      e.to = id(e.to);
+      e.from += first_free;
+      e.to += first_free;
       graph.addEdge(e);
     }
-    for (const Match& m : links) graph.addEdge(linkEdge(m));
-    graph.optimise(100, static_cast<int>(offset));
-    for (std::size_t i = 0; i < count; ++i) poses.push_back(graph.pose(id(static_cast<int>(i))));
+    for (const Match& m : links) graph.addEdge(linkEdge(m, offset));
+    graph.optimise(100, first_free);
+  };
+  optimise(placing);
+
+  // The other places found: each may correct the session's keyframe by what its drift since the
+  // nearest placing place allows (metres walked along the session's own path).
+  std::vector<double> walked(count, 0.0);
+  for (std::size_t i = 1; i < count; ++i)
+    walked[i] = walked[i - 1] + pathLength(session.graph.keyframes[i - 1].pose.inverse() *
+                                           session.graph.keyframes[i].pose);
+  Joined joined;
+  joined.links = placing;
+  for (const Match& m : found) {
+    const bool places = std::any_of(placing.begin(), placing.end(), [&m](const Match& p) {
+      return p.node == m.node && p.target == m.target;
+    });
+    if (places) continue;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Match& p : placing)
+      nearest = std::min(nearest, std::abs(walked[static_cast<std::size_t>(m.node)] -
+                                           walked[static_cast<std::size_t>(p.node)]));
+    const Eigen::Isometry3d correction =
+        graph.pose(first_free + m.node).inverse() * graph.pose(m.target) * m.measurement;
+    const double allowance = kBaseDriftAllowance + settings_.loop.drift_per_metre * nearest;
+    if (correction.translation().norm() <= allowance && angle(correction) <= allowance)
+      joined.links.push_back(m);
   }
+  // With them, until the graph agrees with every link it keeps (a place that only looked alike
+  // keeps a large residual, as a false loop does in a run).
+  for (std::size_t optimised_with = placing.size(); optimised_with != joined.links.size();) {
+    optimise(joined.links);
+    optimised_with = joined.links.size();
+    std::vector<Match> kept(placing);
+    for (std::size_t k = placing.size(); k < joined.links.size(); ++k)
+      if (graph.whitenedError(linkEdge(joined.links[k], offset)) <=
+          settings_.loop.max_loop_residual)
+        kept.push_back(joined.links[k]);
+    joined.links = std::move(kept);
+  }
+  for (std::size_t i = 0; i < count; ++i)
+    joined.poses.push_back(graph.pose(first_free + static_cast<int>(i)));
+  return joined;
+}
+
+void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
+                           const Session& session, const Joined& joined) const {
+  const std::size_t offset = merged.graph.keyframes.size();
+  const std::size_t count = session.graph.keyframes.size();
+  const auto id = [offset](int node) { return static_cast<int>(offset) + node; };
+  std::vector<Eigen::Isometry3d> poses = joined.poses;
+  if (poses.empty())  // the first session: the merged frame is its own
+    for (const auto& k : session.graph.keyframes) poses.push_back(k.pose);
 
   for (std::size_t i = 0; i < count; ++i)
     merged.graph.keyframes.push_back(
@@ -227,7 +275,7 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
     e.to = id(e.to);
     merged.graph.edges.push_back(e);
   }
-  for (const Match& m : links) merged.graph.edges.push_back(linkEdge(m));
+  for (const Match& m : joined.links) merged.graph.edges.push_back(linkEdge(m, offset));
   merged.graph.places.resize(offset);
   for (std::size_t i = 0; i < count; ++i)
     merged.graph.places.push_back(i < session.graph.places.size() ? session.graph.places[i]
@@ -240,6 +288,15 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
                    session.graph.keyframes.front().pose.inverse() * entry.pose;
     entry.anchor = id(node);
     merged.keyframes.push_back(std::move(entry));
+  }
+  // The runs' trajectories, anchored to the merged graph's keyframes as the kept keyframes are.
+  for (const auto& [to, from] : {std::make_pair(&merged.frames, &session.frames),
+                                 std::make_pair(&merged.fused, &session.fused)}) {
+    for (const AnchoredPose& p : *from) {
+      AnchoredPose a = anchoredInGraph(session, p);
+      a.anchor = id(static_cast<int>(a.anchor));
+      to->push_back(a);
+    }
   }
   owner.insert(owner.end(), count, index);
 }
@@ -263,23 +320,28 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
     for (std::size_t i = 1; i < sessions.size(); ++i) {
       if (placements[i].placed) continue;
       const std::vector<Match> matches = findMatches(merged, sessions[i], comparisons);
-      const std::optional<std::vector<Match>> links = agreeing(matches);
-      spdlog::debug("merge: session {}: {} places found, {} agreeing", i, matches.size(),
-                    links ? links->size() : 0);
-      if (!links) continue;
+      const std::optional<std::vector<Match>> placing = agreeing(matches);
+      if (!placing) {
+        spdlog::debug("merge: session {}: {} places found, too few agreeing", i, matches.size());
+        continue;
+      }
+      const Joined joined = join(merged, sessions[i], *placing, matches);
+      spdlog::debug("merge: session {}: {} places found, {} agreeing, {} linked", i, matches.size(),
+                    placing->size(), joined.links.size());
       std::map<int, int> by_owner;
-      for (const Match& m : *links) ++by_owner[owner[static_cast<std::size_t>(m.target)]];
+      for (const Match& m : *placing) ++by_owner[owner[static_cast<std::size_t>(m.target)]];
       const std::size_t offset = merged.graph.keyframes.size();
-      append(merged, owner, static_cast<int>(i), sessions[i], *links);
+      append(merged, owner, static_cast<int>(i), sessions[i], joined);
       Placement& p = placements[i];
       p.placed = true;
       p.first_keyframe = offset;
-      p.links = static_cast<int>(links->size());
+      p.links = static_cast<int>(joined.links.size());
+      p.placing = static_cast<int>(placing->size());
       p.linked_to =
           std::max_element(by_owner.begin(), by_owner.end(), [](const auto& a, const auto& b) {
             return a.second < b.second;
           })->first;
-      p.transform = links->front().transform;  // (fitted below once the graph of all settles)
+      p.transform = placing->front().transform;  // (fitted below once the graph of all settles)
       progress = true;
     }
   }

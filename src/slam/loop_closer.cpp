@@ -17,8 +17,6 @@ namespace {
 constexpr std::size_t kMaxQueued = 4;
 // Nearest candidates by pose that are compared by appearance, per keyframe.
 constexpr std::size_t kMaxCompared = 20;
-// Corrections a loop may make beyond its drift allowance (m, rad).
-constexpr double kBaseAllowance = 0.05;
 // A loop that moves the newest pose by this much (m, or rad) is worth a log line.
 constexpr double kNoticeableShift = 0.01;
 
@@ -274,7 +272,7 @@ bool LoopCloser::plausible(const LoopMeasurement& loop) const {
   const Eigen::Isometry3d correction = graph_.pose(loop.later).inverse() * impliedPose(loop);
   const double walked = std::abs(nodes_[static_cast<std::size_t>(loop.later)].walked -
                                  nodes_[static_cast<std::size_t>(loop.earlier)].walked);
-  const double allowance = kBaseAllowance + options_.drift_per_metre * walked;
+  const double allowance = kBaseDriftAllowance + options_.drift_per_metre * walked;
   return correction.translation().norm() <= allowance && angle(correction) <= allowance;
 }
 
@@ -367,16 +365,18 @@ void LoopCloser::lookForSavedMap(int id) {
 
 bool LoopCloser::join(const Placement& first, const Placement& second) {
   std::unique_lock<std::mutex> graph_lock(graph_mutex_);
-  const PoseGraph::Checkpoint before = graph_.checkpoint(first_own_);
-  // The run's part moved rigidly into the saved frame, then let go and optimised with the two
-  // loops (the saved part stays where it is: it is the map the run continues).
+  const PoseGraph::Checkpoint before = graph_.checkpoint(0);
+  // The run's part moved rigidly into the saved frame, then let go: from here on one graph,
+  // optimised whole with only the saved run's first keyframe held, as one run over both would
+  // be. The saved keyframes move too when the new loops say so: holding them would keep the
+  // saved run's drift in the map for good.
   for (int i = first_own_; i < graph_.size(); ++i)
     graph_.setPose(i, second.own_in_saved * graph_.pose(i));
   graph_.hold(first_own_, false);
   for (const Placement* p : {&first, &second})
     graph_.addEdge(edgeOf(p->loop.earlier, p->loop.later, p->loop.later_in_earlier,
                           p->loop.information, true));
-  const PoseGraph::Summary summary = graph_.optimise(100, first_own_);
+  const PoseGraph::Summary summary = graph_.optimise(100, 0);
   stats_.optimise_latency.record(summary.seconds);
   const double worst = graph_.worstWhitenedError(2);
   if (!summary.usable || worst > options_.max_loop_residual) {

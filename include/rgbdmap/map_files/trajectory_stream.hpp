@@ -10,6 +10,18 @@
 
 namespace rgbdmap {
 
+// A pose as tracked with the keyframe it is anchored to (-1: none), so that the pose graph's
+// corrections move it: a line of a spool (below).
+struct AnchoredPose {
+  double timestamp = 0.0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  std::int64_t anchor = -1;
+};
+// A spool's line: "timestamp tx ty tz qx qy qz qw anchor", without the newline.
+std::string spoolLine(const AnchoredPose& pose);
+// Reads one back; false for a line that is not one.
+bool parseSpoolLine(const std::string& line, AnchoredPose& pose);
+
 // "<path>.anchored": the spool beside a trajectory file when loop closure can still move its
 // poses (a second Ctrl-C removes it, see output_files.hpp).
 std::string spoolFileOf(const std::string& trajectory_path);
@@ -36,15 +48,13 @@ class TrajectoryStream : public PoseSink {
   bool persist(std::string& error);
 
   const std::string& path() const { return path_; }
+  // The spool, with loop closure ("" without: the file itself holds the poses).
+  std::string spool() const { return corrections_ ? spool_ : std::string(); }
   // Reads the file as persist() last left it.
   Trajectory load() const { return Trajectory::load(path_); }
 
  private:
-  struct Entry {
-    double timestamp;
-    Eigen::Isometry3d pose;
-    std::int64_t anchor;
-  };
+  using Entry = AnchoredPose;
   bool append(const std::string& file, const std::vector<Entry>& entries, bool with_anchor,
               bool truncate, std::string& error);
   bool rewriteFromSpool(std::string& error);

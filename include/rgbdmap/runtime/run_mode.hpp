@@ -88,6 +88,9 @@ class RunMode {
   // What the map holds before the first frame (continuing: the saved keyframes, fused once the
   // run joins the saved map).
   virtual void startMap(Mapper& mapper) const;
+  // What the trajectories hold before the first frame (continuing: the saved runs' frames and
+  // fused keyframes, which the one graph corrects from the join on); null: not written.
+  virtual void startTrajectories(PoseSink* frames, PoseSink* keyframes) const;
   // How the run poses and maps, for the log (`poses`: the pose provider's description).
   virtual std::string describe(const std::string& poses, const Config& config,
                                const LoopThread& loop) const = 0;
@@ -126,6 +129,7 @@ class ContinueSession : public RunMode {
   std::string name() const override { return "continuing " + path_; }
   LoopThread startLoopThread(const Config& config, RunStats& stats, bool lossless) const override;
   void startMap(Mapper& mapper) const override;
+  void startTrajectories(PoseSink* frames, PoseSink* keyframes) const override;
   std::string describe(const std::string& poses, const Config& config,
                        const LoopThread& loop) const override;
   int end(const LoopThread& loop, RunStats& stats, const std::vector<SkipReasons::Entry>& skipped,

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/map_files/trajectory_stream.hpp"
 #include "rgbdmap/mapping/keyframe_store.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/slam/loop_closer.hpp"
@@ -27,6 +29,14 @@ struct Session {
   // as they are when written (streamed under its lock, not copied) and `graph` is not used.
   const LoopCloser* live_graph = nullptr;
   std::vector<KeyframeStore::Entry> keyframes;  // the kept ones, images shared
+  // The trajectories of the runs behind it, as their spools hold them (TrajectoryStream): each
+  // pose as tracked with its anchor keyframe, so the graph corrects it. Every frame tracked and
+  // every keyframe fused; a run that continues the session writes them before its own, so that
+  // its trajectory files hold every run's poses, at the one graph's final poses.
+  std::vector<AnchoredPose> frames, fused;
+  // Set while a run writes its session: its spools, copied into the session as they are (not
+  // held in memory: an hour's frames are 10 MB); "" = `frames` and `fused` are written.
+  std::string frames_spool, fused_spool;
   // A fleet's merged session (rgbdmap_merger): each robot run's session stream as the merger
   // had it (SessionStream records: graph, places, map pieces), so that a merger restarted from
   // the session picks up again (streams.bin; none in a run's own session).
@@ -57,6 +67,17 @@ SessionSummary summarise(const Session& session, const std::string& path);
 // The corrections the session's graph makes to its keyframes' odometry (PoseCorrections'
 // table: optimised pose times the inverse of the odometry pose, by keyframe id).
 PoseCorrections::Table correctionsOf(const Session& session);
+// A pose of one of the session's trajectories, anchored to a keyframe its graph holds: one
+// tracked before the first keyframe is expressed in that keyframe's frame, one tracked after the
+// newest one the graph holds (a checkpoint's session) shares the newest's correction, as it did
+// in its run.
+AnchoredPose anchoredInGraph(const Session& session, AnchoredPose pose);
+// The graph's keyframes at their optimised poses, in time order (`rgbdmap session
+// --trajectory`, and what a merge writes beside its map).
+Trajectory graphTrajectory(const Session& session);
+// One of the session's trajectories (`frames` or `fused`) at the graph's poses, in time order.
+Trajectory resolvedTrajectory(const Session& session, const std::vector<AnchoredPose>& poses);
+
 // Fuses the session's kept keyframes into `mapper` at the graph's poses (the mapper made with
 // `corrections`, published here): the session's map, as a later run starts from it.
 void fuseSession(const Session& session, PoseCorrections& corrections, Mapper& mapper);

@@ -10,6 +10,7 @@
 
 #include "rgbdmap/config/config.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
+#include "rgbdmap/slam/pose_graph.hpp"
 
 namespace rgbdmap {
 
@@ -18,6 +19,10 @@ namespace rgbdmap {
 // (loop closure's verification: ORB, PnP, dense alignment) and agree on where its frame lies;
 // then one pose graph is optimised over all of them: the placed sessions' keyframes held, the
 // new one's free, its odometry and loop edges kept, and a loop edge for each agreeing place.
+// Every other place found becomes a loop edge too once it passes loop closure's checks (within
+// the drift its path from the placing places allows, then agreeing with the graph optimised
+// with it): those along the session's path are what take its drift out, as the loops between
+// two parts of one run would.
 // A session without kept keyframes (a robot's stream) is looked for by its places instead.
 // Sessions are tried again until none more can be placed, so a session linked only through
 // another one joins too. A session that shares no place with the others is left out. Last, one
@@ -38,7 +43,8 @@ class SessionMerger {
   struct Placement {
     bool placed = false;
     Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  // its frame in the first's
-    int links = 0;                   // agreeing places it was placed by
+    int links = 0;                   // places that tie it to the others (placing ones first)
+    int placing = 0;                 // agreeing places it was placed by
     int linked_to = -1;              // the session (index) most of them belong to
     std::size_t first_keyframe = 0;  // its keyframes' place in the merged graph
   };
@@ -84,8 +90,19 @@ class SessionMerger {
   std::vector<Match> findPlaceMatches(const Session& merged, const Session& session,
                                       PlaceComparisons* comparisons) const;
   std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
+  // Where a session placed by `placing` lies in the merged frame (its keyframes' poses), tied
+  // there by `links`: the placing places and those of `found` that pass loop closure's checks.
+  struct Joined {
+    std::vector<Match> links;
+    std::vector<Eigen::Isometry3d> poses;
+  };
+  Joined join(const Session& merged, const Session& session, const std::vector<Match>& placing,
+              const std::vector<Match>& found) const;
+  // The loop edge of a place found: from the merged keyframe to the session's (its keyframes
+  // numbered from `offset`).
+  PoseGraph::Edge linkEdge(const Match& m, std::size_t offset) const;
   void append(Session& merged, std::vector<int>& owner, int index, const Session& session,
-              const std::vector<Match>& links) const;
+              const Joined& joined) const;
   // One pose graph over every placed session's keyframes, the first keyframe held: their own
   // edges and the links between them.
   void optimiseTogether(Session& merged) const;

@@ -21,6 +21,10 @@ inline double rotationAngle(const Eigen::Isometry3d& motion) {
   return Eigen::AngleAxisd(motion.linear()).angle();
 }
 
+// A loop may correct a pose by this much (m, and rad) beyond the drift allowance of the path
+// walked between its two keyframes (loop.drift_per_metre).
+constexpr double kBaseDriftAllowance = 0.05;
+
 // The path a step adds, for the drift allowances that grow with it.
 inline double pathLength(const Eigen::Isometry3d& step) {
   return step.translation().norm() + kMetresPerRadian * rotationAngle(step);
