@@ -121,6 +121,8 @@ TEST(Continuation, ASavedMapNeverRecognisedLeavesTheRunsOwnMap) {
   const double own = static_cast<double>(test::loadMap(dir + "/more.pcd").size());
   const double alone = static_cast<double>(test::loadMap(dir + "/alone.pcd").size());
   EXPECT_NEAR(own, alone, 0.01 * alone);
+  // Its trajectory holds its own frames only: the saved run's are in a frame it never joined.
+  EXPECT_EQ(run.trajectory.size(), Trajectory::load(dir + "/alone_trajectory.txt").size());
   // Where it is: the same surfaces, as precise as the run from nothing.
   EXPECT_NEAR(test::precisionOf(dir + "/more.pcd", orbit, dir + "/more_keyframes.txt"),
               test::precisionOf(dir + "/alone.pcd", orbit, dir + "/alone_keyframes.txt"), 0.005);

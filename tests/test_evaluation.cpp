@@ -159,6 +159,30 @@ pcl::PointCloud<pcl::PointXYZ> positions(const pcl::PointCloud<pcl::PointXYZRGB>
   return out;
 }
 
+// A continued run's trajectory holds the saved run's poses first, and the saved run may have been
+// recorded later (a replay of an older sequence): read in time order. One pose a time.
+TEST(TrajectoryFile, RunsOutOfTimeOrderAreReadInOrderAndARepeatedStampIsRefused) {
+  const std::string dir = test::freshDir();
+  std::ofstream(dir + "/runs.txt") << "# timestamp tx ty tz qx qy qz qw\n"
+                                   << "20.0 2 0 0 0 0 0 1\n21.0 3 0 0 0 0 0 1\n"
+                                   << "10.0 0 0 0 0 0 0 1\n11.0 1 0 0 0 0 0 1\n";
+  const Trajectory runs = Trajectory::load(dir + "/runs.txt");
+  ASSERT_EQ(runs.size(), 4u);
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    EXPECT_DOUBLE_EQ(runs[i].pose.translation().x(), static_cast<double>(i));
+  EXPECT_DOUBLE_EQ(runs[0].timestamp, 10.0);
+  std::ofstream(dir + "/twice.txt") << "10.0 0 0 0 0 0 0 1\n11.0 1 0 0 0 0 0 1\n"
+                                    << "10.0 2 0 0 0 0 0 1\n";
+  try {
+    Trajectory::load(dir + "/twice.txt");
+    ADD_FAILURE() << "a repeated timestamp was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + "/twice.txt: timestamp 10.000000 appears on two"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(MapEvaluation, PointsOnTheSurfaceArePreciseAndComplete) {
   const SyntheticScene scene = SyntheticScene::defaultRoom();
   const auto map = samplesOnScene(scene, 30000);

@@ -209,6 +209,14 @@ TEST(SessionFile, TruncatedCorruptOrOtherVersionIsRefusedNamingTheFile) {
         << refusal(s);
   }
   {
+    // A session written before the trajectories were kept reads, without them.
+    const std::string s = copySession(dir, "older.session");
+    fs::remove(s + "/frames.anchored");
+    fs::remove(s + "/keyframes.anchored");
+    EXPECT_EQ(refusal(s), "");
+    EXPECT_TRUE(readSession(s).frames.empty());
+  }
+  {
     const std::string s = copySession(dir, "missing.session");
     fs::remove(s + "/graph.bin");
     EXPECT_NE(refusal(s).find(s + "/graph.bin: cannot open"), std::string::npos) << refusal(s);

@@ -28,15 +28,26 @@ Trajectory Trajectory::load(const std::string& path) {
     if (std::abs(norm - 1.0) > 1e-2)
       throw InputError(where(path, line.number) + ": quaternion norm is " + std::to_string(norm) +
                        ", expected a unit quaternion");
-    if (!trajectory.empty() && v[0] <= trajectory.poses_.back().timestamp)
-      throw InputError(where(path, line.number) + ": timestamp " + line.fields[0] +
-                       " is not after the previous line's");
     StampedPose p;
     p.timestamp = v[0];
     p.pose = Eigen::Isometry3d::Identity();
     p.pose.linear() = q.normalized().toRotationMatrix();
     p.pose.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
     trajectory.poses_.push_back(p);
+  }
+  // A continued run's file holds the saved runs' poses first: when the saved run was recorded
+  // after this one (a replay of an older sequence) the file is in time order run by run only.
+  std::vector<StampedPose>& poses = trajectory.poses_;
+  std::stable_sort(poses.begin(), poses.end(), [](const StampedPose& a, const StampedPose& b) {
+    return a.timestamp < b.timestamp;
+  });
+  const auto twice = std::adjacent_find(
+      poses.begin(), poses.end(),
+      [](const StampedPose& a, const StampedPose& b) { return a.timestamp == b.timestamp; });
+  if (twice != poses.end()) {
+    char stamp[64];
+    std::snprintf(stamp, sizeof stamp, "%.6f", twice->timestamp);
+    throw InputError(path + ": timestamp " + stamp + " appears on two lines (one pose a time)");
   }
   return trajectory;
 }
