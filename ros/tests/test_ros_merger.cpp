@@ -11,6 +11,7 @@
 #include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <fstream>
 
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
@@ -154,6 +155,11 @@ class RosMerger : public RosTest {
     EXPECT_NE(log.find("/robot3 not placed"), std::string::npos) << log;
     EXPECT_EQ(log.find("/robot3 placed"), std::string::npos) << log;
     EXPECT_TRUE(std::filesystem::exists(dir_ + "/merged.session/graph.bin")) << log;
+    // The merged graph's keyframe trajectory beside the map: a line per keyframe of the graph.
+    std::ifstream keyframes(dir_ + "/merged_keyframes.txt");
+    std::size_t lines = 0;
+    for (std::string line; std::getline(keyframes, line);) lines += !line.empty() && line[0] != '#';
+    EXPECT_EQ(lines, readSession(dir_ + "/merged.session").graph.keyframes.size()) << log;
     return placement;
   }
 
