@@ -27,8 +27,9 @@ struct SessionRun {
   std::string log, stats;  // the output, and --stats' JSON (checked to parse)
   Trajectory trajectory;   // OUT_trajectory.txt (every frame), in time order
 };
-// A TUM trajectory file whose runs need not be in time order (continuing a saved run of a
-// sequence recorded later), in time order.
+// A TUM trajectory file, in time order, that may repeat a stamp: two synthetic walks share a
+// clock, so a run that continues one with the other writes both runs' stamps (Trajectory::load
+// refuses a repeated stamp, as no camera's clock repeats).
 Trajectory loadAnyOrder(const std::string& path);
 // `rgbdmap --localise session` over `sequence` (lossless), its files named after `out` (no
 // extension).

@@ -219,7 +219,6 @@ bool writeTrajectory(const std::string& path, const std::vector<AnchoredPose>& p
   return writeFileAtomically(
       path,
       [&](int fd) {
-        std::string text;
         if (!spool.empty()) {
           std::ifstream in(spool, std::ios::binary);
           if (!in && fs::exists(spool)) return false;
@@ -230,6 +229,7 @@ bool writeTrajectory(const std::string& path, const std::vector<AnchoredPose>& p
           }
           return true;
         }
+        std::string text;
         for (const AnchoredPose& p : poses) {
           text += spoolLine(p);
           text.push_back('\n');
