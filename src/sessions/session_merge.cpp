@@ -108,7 +108,7 @@ std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(
     const Session& merged, const Session& session, PlaceComparisons* comparisons) const {
   PlaceComparisons own;  // none kept: this merge's only
   PlaceComparisons& compared = comparisons ? *comparisons : own;
-  const PlaceMatcher matcher(session.camera, settings_.loop);
+  const PlaceMatcher matcher(session.camera, settings_.tracking, settings_.loop);
   std::vector<int> targets, queries;
   for (std::size_t id = 0; id < merged.graph.places.size(); ++id)
     if (merged.graph.places[id]) targets.push_back(static_cast<int>(id));

@@ -1,17 +1,15 @@
 #include "rgbdmap/slam/place_matcher.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <opencv2/features2d.hpp>
-#include <unordered_map>
+#include <opencv2/imgproc.hpp>
 
-#include "rgbdmap/slam/motion.hpp"
 #include "rgbdmap/tracking/relocaliser.hpp"
 
 namespace rgbdmap {
 namespace {
-
-using Points = std::vector<Eigen::Vector3d>;
 
 void ratioMatches(const cv::Mat& a, const cv::Mat& b, std::vector<cv::DMatch>& matches) {
   matches.clear();
@@ -24,173 +22,94 @@ void ratioMatches(const cv::Mat& a, const cv::Mat& b, std::vector<cv::DMatch>& m
     if (m.size() == 2 && m[0].distance <= 0.8f * m[1].distance) matches.push_back(m[0]);
 }
 
-// The reference's densest level as points (x y z), at most `max_points`, evenly spread.
-Points surfaceOf(const PackedReference& packed, std::size_t max_points) {
-  AlignmentReference reference;
-  packed.expand(reference);
-  const AlignmentReference::Level* densest = nullptr;
-  for (const auto& level : reference.levels)
-    if (!densest || level.points.size() > densest->points.size()) densest = &level;
-  Points points;
-  if (!densest || densest->points.empty()) return points;
-  const std::size_t stride = std::max<std::size_t>(1, densest->points.size() / max_points);
-  for (std::size_t i = 0; i < densest->points.size(); i += stride)
-    points.push_back(densest->points[i].head<3>().cast<double>());
-  return points;
-}
-
-// Nearest-point lookup in a grid of `cell`-sized cubes (the search looks one cell around).
-class PointGrid {
- public:
-  PointGrid(const Points& points, double cell) : points_(points), cell_(cell) {
-    for (std::size_t i = 0; i < points.size(); ++i) cells_[key(cellOf(points[i]))].push_back(i);
-  }
-  // The points within `radius` (<= cell) of `p`.
-  void within(const Eigen::Vector3d& p, double radius, std::vector<std::size_t>& out) const {
-    out.clear();
-    const Eigen::Vector3i c = cellOf(p);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (const std::size_t i : it->second)
-            if ((points_[i] - p).squaredNorm() <= radius * radius) out.push_back(i);
-        }
-  }
-  // The nearest point within `radius` (<= cell), or -1.
-  long nearest(const Eigen::Vector3d& p, double radius) const {
-    const Eigen::Vector3i c = cellOf(p);
-    long best = -1;
-    double best_d2 = radius * radius;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (const std::size_t i : it->second) {
-            const double d2 = (points_[i] - p).squaredNorm();
-            if (d2 < best_d2) {
-              best_d2 = d2;
-              best = static_cast<long>(i);
-            }
-          }
-        }
-    return best;
-  }
-
- private:
-  Eigen::Vector3i cellOf(const Eigen::Vector3d& p) const {
-    return (p / cell_).array().floor().cast<int>();
-  }
-  static std::int64_t key(const Eigen::Vector3i& c) {
-    return (static_cast<std::int64_t>(c.x() & 0x1fffff) << 42) |
-           (static_cast<std::int64_t>(c.y() & 0x1fffff) << 21) | (c.z() & 0x1fffff);
-  }
-  const Points& points_;
-  double cell_;
-  std::unordered_map<std::int64_t, std::vector<std::size_t>> cells_;
-};
-
-struct IcpResult {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  std::size_t inliers = 0;
-  double rms = 0.0;
-  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // per point
-};
-
-// Each point's surface normal from its neighbours within `radius` (zero where too few).
-Points normalsOf(const Points& points, const PointGrid& grid, double radius) {
-  Points normals(points.size(), Eigen::Vector3d::Zero());
-  std::vector<std::size_t> near;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    grid.within(points[i], radius, near);
-    if (near.size() < 6) continue;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const std::size_t j : near) mean += points[j];
-    mean /= static_cast<double>(near.size());
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    for (const std::size_t j : near) {
-      const Eigen::Vector3d d = points[j] - mean;
-      covariance += d * d.transpose();
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-    // Planar enough: the smallest spread well under the middle one.
-    if (eigen.eigenvalues()(0) > 0.1 * eigen.eigenvalues()(1)) continue;
-    normals[i] = eigen.eigenvectors().col(0);
-  }
-  return normals;
-}
-
-// Point-to-plane ICP of `query` (its camera) onto `target` (the candidate's), from `start`:
-// Gauss-Newton on the distances to the target's local planes, pairs within a radius shrinking
-// from max_pair to inlier.
-IcpResult icp(const Points& query, const Points& target, const Eigen::Isometry3d& start,
-              const PlaceMatcher::Options& o) {
-  const PointGrid grid(target, o.max_pair);
-  const Points normals = normalsOf(target, grid, 0.02);
-  IcpResult r;
-  r.pose = start;
-  double radius = o.max_pair;
-  using Matrix6d = Eigen::Matrix<double, 6, 6>;
-  using Vector6d = Eigen::Matrix<double, 6, 1>;
-  // Adds a pair's row to the normal equations; returns its squared distance.
-  const auto accumulate = [&](const Eigen::Vector3d& p, std::size_t j, Matrix6d& h, Vector6d& g) {
-    const Eigen::Vector3d& n = normals[j];
-    const double e = n.dot(p - target[j]);
-    Vector6d jacobian;
-    jacobian.head<3>() = n;
-    jacobian.tail<3>() = p.cross(n);
-    h += jacobian * jacobian.transpose();
-    g += jacobian * e;
-    return e * e;
+// The view a place was made from, as the dense aligner samples a frame (a place keeps no
+// image): its reference's finest level drawn into that level's image, each point's intensity
+// and depth at its pixel (the nearest point where two fall on one), then levels finest+1..
+// levels-1 halved from it. The pixels the reference left out (flat ones, every other row and
+// column, and those without depth) take the mean of their drawn neighbours, ring after ring:
+// flat pixels are what their neighbours are, and a candidate's point that lands where the
+// place had no depth still finds an intensity to compare. False: nothing to draw.
+bool drawView(const AlignmentReference& reference, int finest, int levels, ImagePyramid& out) {
+  if (finest >= static_cast<int>(reference.levels.size())) return false;
+  const AlignmentReference::Level& level = reference.levels[static_cast<std::size_t>(finest)];
+  const LevelCamera& c = level.camera;
+  if (level.points.empty() || c.width < 4 || c.height < 4) return false;
+  // Each point spread over its four nearest pixels by bilinear weights (a place seen from
+  // elsewhere does not fall on pixel centres), among the points nearest the camera there.
+  cv::Mat nearest(c.height, c.width, CV_32FC1, cv::Scalar(0));
+  const auto pixelOf = [&c](const Eigen::Vector4f& p, float& u, float& v) {
+    if (!(p.z() > 0.0f)) return false;
+    u = c.fx * p.x() / p.z() + c.cx;
+    v = c.fy * p.y() / p.z() + c.cy;
+    return u >= 0.0f && v >= 0.0f && u <= static_cast<float>(c.width - 1) &&
+           v <= static_cast<float>(c.height - 1);
   };
-  for (int iteration = 0; iteration < 30; ++iteration) {
-    Matrix6d h = Matrix6d::Zero();
-    Vector6d g = Vector6d::Zero();
-    std::size_t pairs = 0;
-    for (const Eigen::Vector3d& q : query) {
-      const Eigen::Vector3d p = r.pose * q;
-      const long j = grid.nearest(p, radius);
-      if (j < 0 || normals[static_cast<std::size_t>(j)].isZero()) continue;
-      accumulate(p, static_cast<std::size_t>(j), h, g);
-      ++pairs;
+  float u = 0, v = 0;
+  for (const Eigen::Vector4f& p : level.points) {
+    if (!pixelOf(p, u, v)) continue;
+    float& z =
+        nearest.at<float>(static_cast<int>(std::lround(v)), static_cast<int>(std::lround(u)));
+    if (z == 0.0f || p.z() < z) z = p.z();
+  }
+  cv::Mat gray(c.height, c.width, CV_32FC1, cv::Scalar(0)),
+      depth(c.height, c.width, CV_32FC1, cv::Scalar(0)),
+      drawn(c.height, c.width, CV_32FC1, cv::Scalar(0));
+  for (const Eigen::Vector4f& p : level.points) {
+    if (!pixelOf(p, u, v)) continue;
+    const int x0 = std::min(static_cast<int>(u), c.width - 2),
+              y0 = std::min(static_cast<int>(v), c.height - 2);
+    const float fx = u - static_cast<float>(x0), fy = v - static_cast<float>(y0);
+    const float weights[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    for (int k = 0; k < 4; ++k) {
+      const int x = x0 + (k & 1), y = y0 + (k >> 1);
+      const float z = nearest.at<float>(y, x);
+      if (weights[k] <= 0.0f || (z > 0.0f && p.z() > 1.05f * z)) continue;  // hidden there
+      gray.at<float>(y, x) += weights[k] * p.w();
+      depth.at<float>(y, x) += weights[k] * p.z();
+      drawn.at<float>(y, x) += weights[k];
     }
-    if (pairs < 12) return r;
-    const Vector6d step = h.ldlt().solve(-g);
-    if (!step.allFinite()) return r;
-    Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
-    const double angle = step.tail<3>().norm();
-    if (angle > 0)
-      delta.linear() = Eigen::AngleAxisd(angle, step.tail<3>() / angle).toRotationMatrix();
-    delta.translation() = step.head<3>();
-    r.pose = delta * r.pose;
-    radius = std::max(o.inlier, radius * 0.7);
-    if (radius <= o.inlier && step.norm() < 1e-6) break;
   }
-  // The inliers at the final pose: their count, spread and how well they pin the pose down.
-  Matrix6d h = Matrix6d::Zero();
-  Vector6d g = Vector6d::Zero();
-  double sum = 0.0;
-  for (const Eigen::Vector3d& q : query) {
-    const Eigen::Vector3d p = r.pose * q;
-    const long j = grid.nearest(p, o.inlier);
-    if (j < 0) continue;
-    ++r.inliers;
-    if (normals[static_cast<std::size_t>(j)].isZero()) continue;
-    sum += accumulate(p, static_cast<std::size_t>(j), h, g);
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      float& w = drawn.at<float>(y, x);
+      if (w < 0.05f) {  // too little of any point to say
+        gray.at<float>(y, x) = depth.at<float>(y, x) = w = 0.0f;
+        continue;
+      }
+      gray.at<float>(y, x) /= w;
+      depth.at<float>(y, x) /= w;
+      w = 1.0f;
+    }
+  cv::Mat sum, count;
+  for (int ring = 0; ring < c.width + c.height &&
+                     static_cast<std::size_t>(cv::countNonZero(drawn)) < gray.total();
+       ++ring) {
+    cv::boxFilter(gray, sum, -1, cv::Size(3, 3), cv::Point(-1, -1), false);
+    cv::boxFilter(drawn, count, -1, cv::Size(3, 3), cv::Point(-1, -1), false);
+    for (int y = 0; y < c.height; ++y) {
+      float* g = gray.ptr<float>(y);
+      float* d = drawn.ptr<float>(y);
+      const float* s = sum.ptr<float>(y);
+      const float* n = count.ptr<float>(y);
+      for (int x = 0; x < c.width; ++x)
+        if (d[x] == 0.0f && n[x] > 0.0f) {
+          g[x] = s[x] / n[x];
+          d[x] = 1.0f;
+        }
+    }
   }
-  if (r.inliers == 0) return r;
-  r.rms = std::sqrt(sum / static_cast<double>(r.inliers));
-  const double sigma = std::max(r.rms, 0.002);
-  r.information = h / static_cast<double>(r.inliers) / (sigma * sigma);
-  return r;
+  out.buildFromLevel(gray, depth, c, finest, levels);
+  return true;
 }
 
 }  // namespace
 
-PlaceMatcher::PlaceMatcher(const CameraIntrinsics& camera, const LoopOptions& loop, Options options)
-    : camera_(camera), loop_(loop), options_(options) {}
+PlaceMatcher::PlaceMatcher(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+                           const LoopOptions& loop)
+    : camera_(camera),
+      tracking_(loopVerificationOptions(tracking, loop)),
+      loop_(loop),
+      aligner_(tracking_) {}
 
 int PlaceMatcher::similarity(const PlaceRecognition::Place& a,
                              const PlaceRecognition::Place& b) const {
@@ -218,28 +137,19 @@ std::optional<LoopMeasurement> PlaceMatcher::match(const PlaceRecognition::Place
   const std::optional<Eigen::Isometry3d> candidate_in_query =
       solvePnp(object, image, camera_, false, loop_.min_inliers, &inliers);
   if (!candidate_in_query) return std::nullopt;
-  const Eigen::Isometry3d by_features = candidate_in_query->inverse();  // X_cand^-1 X_query
-  if (by_features.translation().norm() > loop_.max_distance) return std::nullopt;
-
-  const Points query_points = surfaceOf(query.reference, options_.max_points);
-  const Points target = surfaceOf(candidate.reference, std::numeric_limits<std::size_t>::max());
-  if (query_points.empty() || target.empty()) return std::nullopt;
-  IcpResult aligned = icp(query_points, target, by_features, options_);
-  const double overlap =
-      static_cast<double>(aligned.inliers) / static_cast<double>(query_points.size());
-  if (overlap < options_.min_overlap || aligned.rms > options_.max_rms) return std::nullopt;
-  const Eigen::Isometry3d change = by_features.inverse() * aligned.pose;
-  if (change.translation().norm() > loop_.max_disagreement_translation ||
-      rotationAngle(change) > loop_.max_disagreement_rotation ||
-      aligned.pose.translation().norm() > loop_.max_distance)
+  // (Only places the camera has really been back to, as loop closure's.)
+  if (candidate_in_query->translation().norm() > loop_.max_distance) return std::nullopt;
+  AlignmentReference target, seen;
+  candidate.reference.expand(target);
+  query.reference.expand(seen);
+  ImagePyramid view;
+  if (!drawView(seen, tracking_.finest_level, tracking_.coarsest_level + 1, view))
     return std::nullopt;
-  LoopMeasurement loop;
-  aligned.pose.linear() = Eigen::Quaterniond(aligned.pose.linear()).normalized().toRotationMatrix();
-  loop.later_in_earlier = aligned.pose;
-  loop.information = aligned.information;
-  loop.matches = static_cast<int>(matches.size());
-  loop.inliers = inliers;
-  loop.overlap = overlap;
+  std::optional<LoopMeasurement> loop = verifiedLoop(
+      aligner_.align(target, view, *candidate_in_query), *candidate_in_query, tracking_, loop_);
+  if (!loop) return std::nullopt;
+  loop->matches = static_cast<int>(matches.size());
+  loop->inliers = inliers;
   return loop;
 }
 

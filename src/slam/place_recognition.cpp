@@ -9,20 +9,40 @@ namespace {
 
 double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
-// The tracker's alignment settings, made finer and geometric for loops (LoopOptions).
-TrackingOptions verificationOptions(const TrackingOptions& tracking, const LoopOptions& loop) {
+}  // namespace
+
+TrackingOptions loopVerificationOptions(const TrackingOptions& tracking, const LoopOptions& loop) {
   TrackingOptions o = tracking;
   o.finest_level = std::min(loop.finest_level, o.coarsest_level);
   o.depth_weight = loop.depth_weight;
   return o;
 }
 
-}  // namespace
+std::optional<LoopMeasurement> verifiedLoop(const AlignmentResult& dense,
+                                            const Eigen::Isometry3d& by_features,
+                                            const TrackingOptions& verification,
+                                            const LoopOptions& loop) {
+  if (!dense.finite || dense.overlap < loop.min_overlap ||
+      dense.intensity_sigma > verification.max_residual)
+    return std::nullopt;
+  const Eigen::Isometry3d change = by_features.inverse() * dense.motion;
+  if (change.translation().norm() > loop.max_disagreement_translation ||
+      angle(change) > loop.max_disagreement_rotation ||
+      dense.motion.translation().norm() > loop.max_distance)
+    return std::nullopt;
+  LoopMeasurement measured;
+  Eigen::Isometry3d relative = dense.motion.inverse();
+  relative.linear() = Eigen::Quaterniond(relative.linear()).normalized().toRotationMatrix();
+  measured.later_in_earlier = relative;
+  measured.information = dense.information;
+  measured.overlap = dense.overlap;
+  return measured;
+}
 
 PlaceRecognition::PlaceRecognition(const CameraIntrinsics& camera, const TrackingOptions& tracking,
                                    const LoopOptions& loop, double min_depth, double max_depth)
     : camera_(camera),
-      tracking_(verificationOptions(tracking, loop)),
+      tracking_(loopVerificationOptions(tracking, loop)),
       options_(loop),
       min_depth_(static_cast<float>(min_depth)),
       max_depth_(static_cast<float>(max_depth)),
@@ -96,26 +116,14 @@ std::optional<LoopMeasurement> PlaceRecognition::find(const std::vector<int>& ca
     // are not a loop, even when they agree.
     if (!found || found->translation().norm() > options_.max_distance) continue;
     earlier.reference.expand(reference_);
-    const AlignmentResult dense = aligner_.align(reference_, pyramid_, *found);
-    if (!dense.finite || dense.overlap < options_.min_overlap ||
-        dense.intensity_sigma > tracking_.max_residual)
-      continue;
-    const Eigen::Isometry3d change = found->inverse() * dense.motion;
-    if (change.translation().norm() > options_.max_disagreement_translation ||
-        angle(change) > options_.max_disagreement_rotation ||
-        dense.motion.translation().norm() > options_.max_distance)
-      continue;
+    std::optional<LoopMeasurement> loop =
+        verifiedLoop(aligner_.align(reference_, pyramid_, *found), *found, tracking_, options_);
+    if (!loop) continue;
     ++counts.verified;
-    LoopMeasurement loop;
-    loop.earlier = id;
-    loop.later = newest;
-    Eigen::Isometry3d relative = dense.motion.inverse();
-    relative.linear() = Eigen::Quaterniond(relative.linear()).normalized().toRotationMatrix();
-    loop.later_in_earlier = relative;
-    loop.information = dense.information;
-    loop.matches = matches;
-    loop.inliers = inliers;
-    loop.overlap = dense.overlap;
+    loop->earlier = id;
+    loop->later = newest;
+    loop->matches = matches;
+    loop->inliers = inliers;
     return loop;
   }
   return std::nullopt;

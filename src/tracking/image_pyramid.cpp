@@ -123,6 +123,23 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
     }
   }
   depth_fraction_ = static_cast<double>(valid) / static_cast<double>(base.depth.total());
+  buildCoarser(first);
+}
+
+void ImagePyramid::buildFromLevel(const cv::Mat& gray, const cv::Mat& depth,
+                                  const LevelCamera& camera, int first, int levels) {
+  levels_.resize(static_cast<std::size_t>(levels));
+  PyramidLevel& base = levels_[static_cast<std::size_t>(first)];
+  base.camera = camera;
+  gray.copyTo(base.gray);
+  depth.copyTo(base.depth);
+  depth_fraction_ = static_cast<double>(cv::countNonZero(depth > 0.0f)) /
+                    static_cast<double>(std::max<std::size_t>(1, depth.total()));
+  buildCoarser(first);
+}
+
+void ImagePyramid::buildCoarser(int first) {
+  const int levels = static_cast<int>(levels_.size());
   for (int i = first + 1; i < levels; ++i) {
     PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
     PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];

@@ -5,39 +5,37 @@
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/slam/loop_options.hpp"
 #include "rgbdmap/slam/place_recognition.hpp"
+#include "rgbdmap/tracking/dense_aligner.hpp"
+#include "rgbdmap/tracking/tracking_options.hpp"
 
 namespace rgbdmap {
 
 // Whether two places show the same spot, from what places keep alone (no images: places sent
 // between robots carry none). ORB matches and PnP RANSAC give a first pose (the query's 3-D points
-// projected into its camera stand for its image); then the two dense references, as point sets,
-// are aligned by ICP from it. The two must agree, and the aligned references must overlap and
-// lie close: loop closure's checks (loop.*), with a geometric alignment for the photometric one.
+// projected into its camera stand for its image); then the candidate's dense reference is aligned
+// from it to the query's view, drawn from the query's own reference (its points' intensities at
+// their pixels), and checked as loop closure checks its loops (verifiedLoop). Measured on two
+// laps of a synthetic room: 0.5 mm RMS from the truth, as loops within a run (an ICP of the two
+// references, used before, was 9.8 mm: their points are too sparse on flat walls).
 class PlaceMatcher {
  public:
-  struct Options {
-    double max_pair = 0.05;         // m: ICP pairs start within this, shrink to `inlier`
-    double inlier = 0.01;           // m: a query point this close to the candidate's surface
-    double min_overlap = 0.3;       // fraction of the query's points that are inliers at the end
-    double max_rms = 0.008;         // m: RMS distance of the inliers
-    std::size_t max_points = 6000;  // query points used (evenly spread)
-  };
-
-  PlaceMatcher(const CameraIntrinsics& camera, const LoopOptions& loop, Options options);
-  PlaceMatcher(const CameraIntrinsics& camera, const LoopOptions& loop)
-      : PlaceMatcher(camera, loop, Options{}) {}
+  // `tracking`: the tracker's alignment settings (made finer for loops by `loop`).
+  PlaceMatcher(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+               const LoopOptions& loop);
 
   // How many distinctive ORB matches the two share (the ranking before match()).
   int similarity(const PlaceRecognition::Place& a, const PlaceRecognition::Place& b) const;
   // `query` seen from `candidate` (later_in_earlier = X_candidate^-1 * X_query, with the
-  // information of the alignment per point), or none; ids are left to the caller.
+  // information of the alignment per pixel, as loops within a run), or none; ids are left to the
+  // caller.
   std::optional<LoopMeasurement> match(const PlaceRecognition::Place& candidate,
                                        const PlaceRecognition::Place& query) const;
 
  private:
   CameraIntrinsics camera_;
+  TrackingOptions tracking_;  // loopVerificationOptions
   LoopOptions loop_;
-  Options options_;
+  DenseAligner aligner_;
 };
 
 }  // namespace rgbdmap

@@ -26,6 +26,19 @@ struct LoopMeasurement {
   double overlap = 0.0;
 };
 
+// The tracker's alignment settings made finer and geometric for verifying loops (LoopOptions:
+// finest_level, depth_weight).
+TrackingOptions loopVerificationOptions(const TrackingOptions& tracking, const LoopOptions& loop);
+
+// Loop closure's checks of a dense alignment (`verification`: loopVerificationOptions) started
+// from the features' pose `by_features` (both map the earlier keyframe's points into the later
+// camera): it overlaps, fits, agrees with the features and joins near views. The measurement
+// (later_in_earlier, information, overlap; ids and counts left to the caller), or none.
+std::optional<LoopMeasurement> verifiedLoop(const AlignmentResult& dense,
+                                            const Eigen::Isometry3d& by_features,
+                                            const TrackingOptions& verification,
+                                            const LoopOptions& loop);
+
 // Finds where the newest keyframe has been before: keeps each keyframe's appearance (ORB
 // features with 3-D points) and its dense alignment reference; among the earlier keyframes a
 // caller proposes (near it, by pose), the best-matching few are verified with PnP RANSAC and

@@ -41,12 +41,20 @@ class ImagePyramid {
   // camera (so the 3-D points and the projection agree everywhere in the image).
   void build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
              bool undistort, float min_depth, float max_depth);
+  // Fills levels first..levels-1 from grey (CV_32FC1) and depth (CV_32FC1, metres, 0 = missing)
+  // images that are already level `first`'s, with that level's camera; the finer levels are
+  // left empty. (What a place keeps of its view is that level alone.)
+  void buildFromLevel(const cv::Mat& gray, const cv::Mat& depth, const LevelCamera& camera,
+                      int first, int levels);
   int levels() const { return static_cast<int>(levels_.size()); }
   const PyramidLevel& level(int i) const { return levels_[static_cast<std::size_t>(i)]; }
   // Fraction of full-resolution pixels with a usable depth.
   double depthFraction() const { return depth_fraction_; }
 
  private:
+  // Levels first+1..levels-1 halved from level `first`, and every level's samples from `first`.
+  void buildCoarser(int first);
+
   std::vector<PyramidLevel> levels_;
   double depth_fraction_ = 0.0;
   cv::Mat gray8_, raw_;                   // reused buffers
