@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <iostream>
 #include <string>
 #include <vector>
 
 #include "rgbdmap/config/config.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/sessions/fleet_merger.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/sessions/session_merge.hpp"
 #include "session_runs.hpp"
@@ -174,7 +176,8 @@ TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
 
 TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   // A fleet's merger has no images: each robot's places (ORB features, packed dense reference)
-  // must place it (PlaceMatcher: PnP, ICP of the references, agreement of two or more).
+  // must place it (PlaceMatcher: PnP, dense alignment to the view drawn from the reference,
+  // agreement of two or more).
   test::mapTo(second_, dir_ + "/b.pcd");
   test::mapTo(test::tumDir("rgbd_dataset_freiburg1_xyz"), dir_ + "/c.pcd");  // a real desk
   const Session a = test::streamed(readSession(dir_ + "/a.session"));
@@ -198,6 +201,30 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
             << " degrees from the truth\n";
   EXPECT_LT(error.translation().norm(), 0.02);
   EXPECT_LT(degrees, 1.0);
+
+  // The fleet's merger gets robot B's records one by one (its graph, then its places, then its
+  // map pieces), a merge after each: once B is placed, each new place of B is compared only
+  // with A's places near where the merged graph puts it. B ends as tied as by the one merge
+  // above, which compared every place of B with every place of A, for a fraction of the
+  // comparisons.
+  FleetMerger fleet({"/a", "/b"}, settings);
+  test::send(fleet, 0, readSession(dir_ + "/a.session"), 1, "/a/x");
+  for (const std::string& record : test::streamOf(readSession(dir_ + "/b.session"), 1)) {
+    fleet.receive(1, record, "/b/x");
+    fleet.merge();
+  }
+  const FleetMerger::Robot robot_b = fleet.robots()[1];
+  ASSERT_TRUE(robot_b.placed);
+  std::size_t places_a = 0, places_b = 0;
+  for (const auto& p : a.graph.places) places_a += p ? 1 : 0;
+  for (const auto& p : b.graph.places) places_b += p ? 1 : 0;
+  std::cout << "the fleet's merger: B tied by " << robot_b.links
+            << " places (one merge: " << placements[1].links << "), " << robot_b.compared
+            << " place pairs compared (of " << places_a * places_b << ")\n";
+  EXPECT_GE(robot_b.links, placements[1].links - 2);
+  EXPECT_LT(robot_b.compared, places_a * places_b / 2);
+  const Eigen::Isometry3d fleet_error = truth.inverse() * robot_b.transform;
+  EXPECT_LT(fleet_error.translation().norm(), 0.02);
 }
 
 }  // namespace

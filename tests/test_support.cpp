@@ -77,6 +77,7 @@ double jsonNumber(const std::string& json, const std::string& key) {
 
 #include <chrono>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <thread>
 
@@ -214,14 +215,25 @@ std::string copySequence(const std::string& source, const std::string& target) {
 }
 
 std::string sequenceTail(const std::string& source, std::size_t first, const std::string& target) {
+  return sequenceSlice(source, first, std::numeric_limits<std::size_t>::max(), target);
+}
+
+std::string sequenceSlice(const std::string& source, std::size_t first, std::size_t end,
+                          const std::string& target) {
   namespace fs = std::filesystem;
   fs::create_directories(target);
   for (const char* list : {"rgb.txt", "depth.txt"}) {
     std::ifstream in(source + "/" + list);
     std::ofstream out(target + "/" + list);
     std::size_t frame = 0;
-    for (std::string line; std::getline(in, line);)
-      if (line.empty() || line[0] == '#' || frame++ >= first) out << line << "\n";
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') {
+        out << line << "\n";
+        continue;
+      }
+      if (frame >= first && frame < end) out << line << "\n";
+      ++frame;
+    }
   }
   fs::copy_file(source + "/groundtruth.txt", target + "/groundtruth.txt");
   for (const char* folder : {"rgb", "depth"})

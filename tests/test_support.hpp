@@ -67,6 +67,9 @@ std::string copySequence(const std::string& source, const std::string& target);
 // A copy of a TUM-layout sequence holding only its frames from `first` on (the lists cut, the
 // ground truth whole, the image folders linked).
 std::string sequenceTail(const std::string& source, std::size_t first, const std::string& target);
+// The same with frames first..end-1 only.
+std::string sequenceSlice(const std::string& source, std::size_t first, std::size_t end,
+                          const std::string& target);
 
 // A write that cannot finish, as on a stalled disk: a FIFO at the name a writer will write (a
 // temporary file's), read by nobody. The writer's open succeeds at once (this object holds the

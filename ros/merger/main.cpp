@@ -16,17 +16,20 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <ctime>
 #include <filesystem>
 #include <mutex>
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/map_files/pcd_file.hpp"
 #include "rgbdmap/ros/cloud_message.hpp"
 #include "rgbdmap/ros/robot_namespaces.hpp"
 #include "rgbdmap/runtime/exit_code.hpp"
 #include "rgbdmap/sessions/fleet_merger.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
+#include "rgbdmap/slam/motion.hpp"
 
 namespace {
 
@@ -124,6 +127,24 @@ bool save(FleetMerger& merger, const Settings& s, std::string& message) {
   return true;
 }
 
+// What the merger cost, for its whole run: the merges (one thread's CPU time), the place pairs
+// each robot's places were compared with, and the process's CPU time (merges, the merged map's
+// fusion and publishing, ROS).
+void reportWork(const FleetMerger& merger, double started) {
+  const FleetMerger::Work work = merger.work();
+  const std::vector<FleetMerger::Robot> robots = merger.robots();
+  std::string compared;
+  for (const FleetMerger::Robot& r : robots)
+    compared += (compared.empty() ? "" : ", ") + r.name + " " + std::to_string(r.compared);
+  const double cpu = static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+  const double minutes = std::max(1e-9, (steadySeconds() - started) / 60.0);
+  spdlog::info(
+      "merger: {} merges ({:.1f} s of CPU), {} maps; place pairs compared: {}; CPU {:.1f} s in "
+      "{:.1f} min ({:.2f} s per robot and minute)",
+      work.merges, work.merge_seconds, work.maps, compared, cpu, minutes,
+      cpu / minutes / static_cast<double>(std::max<std::size_t>(1, robots.size())));
+}
+
 void report(const std::vector<FleetMerger::Robot>& robots) {
   for (const FleetMerger::Robot& r : robots)
     if (!r.placed)
@@ -178,6 +199,7 @@ void broadcastPlacements(const std::vector<FleetMerger::Robot>& robots,
 }
 
 int runMerger() {
+  const double started = steadySeconds();
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
   const Settings s = readSettings(pnh);
@@ -268,6 +290,7 @@ int runMerger() {
   else
     spdlog::warn("merger: {}", message);
   report(merger.robots());
+  reportWork(merger, started);
   spinner.stop();
   return 0;
 }
@@ -276,6 +299,10 @@ int runMerger() {
 
 int main(int argc, char** argv) {
   spdlog::default_logger_raw();
+  // On a machine it shares with robots' nodes, the merger's work (merges, the merged map's
+  // fusion) waits for theirs: a node that drops frames tracks worse, and robots never wait for
+  // the merger. Every thread started from here on inherits it.
+  rgbdmap::giveWayToTracking();
   ros::init(argc, argv, "rgbdmap_merger");
   return rgbdmap::runGuarded([&] { return runMerger(); });
 }

@@ -61,9 +61,11 @@ SessionAssembler::Result FleetMerger::receive(std::size_t index, const std::stri
 
 bool FleetMerger::merge() {
   const std::lock_guard<std::mutex> one_at_a_time(merging_);
+  const double started = threadCpuSeconds();
   // The parts to merge, the first robot's first run first (its frame is the merged one).
   std::vector<Part*> order;
   std::vector<Session> sessions;
+  std::vector<SessionMerger::PlacedBefore> placed_before;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!changed_) return false;
@@ -72,10 +74,14 @@ bool FleetMerger::merge() {
       for (auto& p : parts_)
         if (p->robot == robot && p->stream.keyframes() > 0) order.push_back(p.get());
     if (order.empty() || order.front()->robot != 0) return false;  // the first robot first
-    for (Part* p : order) sessions.push_back(p->stream.session());
+    for (Part* p : order) {
+      sessions.push_back(p->stream.session());
+      placed_before.push_back(p->merged_poses);
+    }
   }
   std::vector<SessionMerger::Placement> placements;
-  Session merged = SessionMerger(settings_).merge(sessions, placements, &comparisons_);
+  Session merged =
+      SessionMerger(settings_).merge(sessions, placements, &comparisons_, placed_before);
   merged.configuration = settings_.toYaml();
   merged.created_by = "rgbdmap merger";
 
@@ -89,14 +95,18 @@ bool FleetMerger::merge() {
     order[i]->placed = placements[i].placed;
     order[i]->placement = placements[i];
     order[i]->merged_keyframes = placements[i].placed ? sessions[i].graph.keyframes.size() : 0;
+    order[i]->merged_poses.clear();
     if (!placements[i].placed) continue;
     for (std::size_t k = 0; k < sessions[i].graph.keyframes.size(); ++k) {
       const auto& node = merged.graph.keyframes[placements[i].first_keyframe + k];
       table[static_cast<std::size_t>(order[i]->slots[k])] = node.pose * node.odometry.inverse();
+      order[i]->merged_poses.push_back(node.pose);
     }
   }
   corrections_.publish(std::move(table));
   merged_ = std::move(merged);
+  ++work_.merges;
+  work_.merge_seconds += threadCpuSeconds() - started;
   for (std::size_t robot = 0; robot < robots_.size(); ++robot) {
     Robot& r = robots_[robot];
     // A robot is where its newest run is (its TF frame is that run's).
@@ -112,6 +122,8 @@ bool FleetMerger::merge() {
     r.keyframes = keyframes;
     r.places = places;
     r.pieces = pieces;
+    for (std::size_t i = 0; i < order.size(); ++i)
+      if (order[i]->robot == robot) r.compared += placements[i].compared;
     const bool was_placed = r.placed;
     r.placed = newest && newest->placed;
     if (!r.placed) continue;
@@ -131,6 +143,11 @@ bool FleetMerger::merge() {
 std::vector<FleetMerger::Robot> FleetMerger::robots() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return robots_;
+}
+
+FleetMerger::Work FleetMerger::work() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return work_;
 }
 
 Session FleetMerger::session() {
@@ -222,6 +239,8 @@ MapCloud FleetMerger::map() {
     m.mapper->settle();
     cloud += *m.mapper->snapshot();
   }
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++work_.maps;
   return cloud;
 }
 

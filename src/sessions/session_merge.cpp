@@ -55,8 +55,11 @@ SessionMerger::PlaceComparisons::Result& SessionMerger::PlaceComparisons::of(
 
 std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merged,
                                                              const Session& session,
-                                                             PlaceComparisons* comparisons) const {
-  if (session.keyframes.empty()) return findPlaceMatches(merged, session, comparisons);
+                                                             PlaceComparisons* comparisons,
+                                                             const PlacedBefore& before,
+                                                             std::size_t& compared) const {
+  if (session.keyframes.empty())
+    return findPlaceMatches(merged, session, comparisons, before, compared);
   PlaceRecognition recognition(session.camera, settings_.tracking, settings_.loop,
                                settings_.filter.min_depth, settings_.filter.max_depth);
   std::vector<int> candidates;
@@ -84,6 +87,7 @@ std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merg
     recognition.add(query);
     PlaceRecognition::Counts counts;
     const std::optional<LoopMeasurement> found = recognition.find(candidates, counts);
+    compared += candidates.size();
     recognition.forget(static_cast<int>(slot));
     if (!found) continue;
     Match m;
@@ -104,30 +108,74 @@ std::vector<SessionMerger::Match> SessionMerger::findMatches(const Session& merg
   return matches;
 }
 
-std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(
-    const Session& merged, const Session& session, PlaceComparisons* comparisons) const {
+std::vector<std::vector<int>> SessionMerger::nearPlaces(const Session& merged,
+                                                        const Session& session,
+                                                        const PlacedBefore& before) const {
+  const auto& own = session.graph.keyframes;
+  const LoopOptions& o = settings_.loop;
+  std::vector<std::vector<int>> near(own.size());
+  if (before.empty()) return near;
+  for (std::size_t k = 0; k < own.size(); ++k) {
+    // A keyframe placed before is where it was put; a newer one follows the last placed by its
+    // own odometry, and may have drifted since by what its path allows.
+    const std::size_t last = std::min(k, before.size() - 1);
+    const Eigen::Isometry3d x = before[last] * own[last].pose.inverse() * own[k].pose;
+    double walked = 0.0;
+    for (std::size_t j = last + 1; j <= k; ++j)
+      walked += pathLength(own[j - 1].pose.inverse() * own[j].pose);
+    const double allowance = o.drift_per_metre * walked;
+    std::vector<std::pair<double, int>> found;
+    for (std::size_t id = 0; id < merged.graph.places.size(); ++id) {
+      if (!merged.graph.places[id]) continue;
+      const Eigen::Isometry3d& xj = merged.graph.keyframes[id].pose;
+      const double distance = (xj.translation() - x.translation()).norm();
+      if (distance > o.search_radius + allowance) continue;
+      const double cosine = std::clamp(xj.linear().col(2).dot(x.linear().col(2)), -1.0, 1.0);
+      if (std::acos(cosine) > o.max_view_angle + allowance) continue;
+      found.emplace_back(distance, static_cast<int>(id));
+    }
+    std::sort(found.begin(), found.end());
+    for (const auto& f : found) near[k].push_back(f.second);
+  }
+  return near;
+}
+
+std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(const Session& merged,
+                                                                  const Session& session,
+                                                                  PlaceComparisons* comparisons,
+                                                                  const PlacedBefore& before,
+                                                                  std::size_t& compared) const {
   PlaceComparisons own;  // none kept: this merge's only
-  PlaceComparisons& compared = comparisons ? *comparisons : own;
+  PlaceComparisons& results = comparisons ? *comparisons : own;
   const PlaceMatcher matcher(session.camera, settings_.tracking, settings_.loop);
-  std::vector<int> targets, queries;
+  std::vector<int> everywhere, queries;
   for (std::size_t id = 0; id < merged.graph.places.size(); ++id)
-    if (merged.graph.places[id]) targets.push_back(static_cast<int>(id));
+    if (merged.graph.places[id]) everywhere.push_back(static_cast<int>(id));
   const std::size_t keyframes = session.graph.keyframes.size();
   for (std::size_t id = 0; id < std::min(keyframes, session.graph.places.size()); ++id)
     if (session.graph.places[id]) queries.push_back(static_cast<int>(id));
+  const std::vector<std::vector<int>> near = nearPlaces(merged, session, before);
   std::vector<Match> matches;
+  // Everywhere, every place against every place would grow with the square of the fleet's
+  // ground: a spread of the session's places. Near where it was placed, each place.
   const std::size_t stride =
-      std::max<std::size_t>(1, queries.size() / std::max<std::size_t>(1, options_.max_queries));
+      before.empty() ? std::max<std::size_t>(
+                           1, queries.size() / std::max<std::size_t>(1, options_.max_queries))
+                     : 1;
   for (std::size_t i = 0; i < queries.size(); i += stride) {
     const int node = queries[i];
     const auto& query = session.graph.places[static_cast<std::size_t>(node)];
+    const std::vector<int>& targets =
+        before.empty() ? everywhere : near[static_cast<std::size_t>(node)];
     const auto pair = [&](int target) -> PlaceComparisons::Result& {
       bool known = false;
       PlaceComparisons::Result& r =
-          compared.of(merged.graph.places[static_cast<std::size_t>(target)], query, known);
-      if (!known)
+          results.of(merged.graph.places[static_cast<std::size_t>(target)], query, known);
+      if (!known) {
         r.alike =
             matcher.similarity(*merged.graph.places[static_cast<std::size_t>(target)], *query);
+        ++compared;
+      }
       return r;
     };
     // The most alike places first, as loop closure ranks its candidates.
@@ -302,8 +350,8 @@ void SessionMerger::append(Session& merged, std::vector<int>& owner, int index,
 }
 
 Session SessionMerger::merge(const std::vector<Session>& sessions,
-                             std::vector<Placement>& placements,
-                             PlaceComparisons* comparisons) const {
+                             std::vector<Placement>& placements, PlaceComparisons* comparisons,
+                             const std::vector<PlacedBefore>& before) const {
   placements.assign(sessions.size(), Placement{});
   Session merged;
   if (sessions.empty()) return merged;
@@ -319,8 +367,15 @@ Session SessionMerger::merge(const std::vector<Session>& sessions,
     progress = false;
     for (std::size_t i = 1; i < sessions.size(); ++i) {
       if (placements[i].placed) continue;
-      const std::vector<Match> matches = findMatches(merged, sessions[i], comparisons);
-      const std::optional<std::vector<Match>> placing = agreeing(matches);
+      static const PlacedBefore kNowhere;
+      const PlacedBefore& near = i < before.size() ? before[i] : kNowhere;
+      std::size_t& compared = placements[i].compared;
+      std::vector<Match> matches = findMatches(merged, sessions[i], comparisons, near, compared);
+      std::optional<std::vector<Match>> placing = agreeing(matches);
+      if (!placing && !near.empty()) {  // not where it was: looked for everywhere
+        matches = findMatches(merged, sessions[i], comparisons, {}, compared);
+        placing = agreeing(matches);
+      }
       if (!placing) {
         spdlog::debug("merge: session {}: {} places found, too few agreeing", i, matches.size());
         continue;

@@ -74,11 +74,21 @@ void LoopCloser::addKeyframe(TrackedKeyframe keyframe) {
   std::unique_lock<std::mutex> lock(mutex_);
   if (lossless_) {
     changed_.wait(lock, [&] { return queue_.size() < kMaxQueued; });
-  } else if (queue_.size() >= kMaxQueued) {
-    // Behind a live camera: the keyframe joins the graph but is not searched for loops.
-    keyframe.color.release();
-    keyframe.depth.release();
-    stats_.loop_keyframes_unsearched.fetch_add(1, std::memory_order_relaxed);
+  } else {
+    // Behind a live camera: the oldest waiting keyframe that still has its images joins the
+    // graph without a search, not this one. Where the camera is now is where a loop is about to
+    // close (a lap's end, seen twice in a row for the loop to be accepted), and the newest
+    // keyframes are the ones searched after the camera stops.
+    std::size_t with_images = 0;
+    for (const TrackedKeyframe& k : queue_) with_images += k.color.empty() ? 0 : 1;
+    for (TrackedKeyframe& k : queue_) {
+      if (with_images < kMaxQueued) break;
+      if (k.color.empty()) continue;
+      k.color.release();
+      k.depth.release();
+      --with_images;
+      stats_.loop_keyframes_unsearched.fetch_add(1, std::memory_order_relaxed);
+    }
   }
   queue_.push_back(std::move(keyframe));
   changed_.notify_all();

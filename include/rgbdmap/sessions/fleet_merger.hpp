@@ -36,6 +36,12 @@ class FleetMerger {
     std::string linked_to;  // the robot most of its agreeing places belong to
     int links = 0;
     std::size_t keyframes = 0, places = 0, pieces = 0, runs = 0;  // pieces: received
+    std::size_t compared = 0;  // its place pairs compared so far (SessionMerger::Placement)
+  };
+  // What the merger has done so far: merges and the CPU time they took (one thread's), maps.
+  struct Work {
+    std::size_t merges = 0, maps = 0;
+    double merge_seconds = 0.0;
   };
 
   // `settings`: the configuration of the merge (loop.*) and of the merged map (filter.*, map.*,
@@ -50,6 +56,7 @@ class FleetMerger {
   // nothing new). Runs SessionMerger without holding the lock.
   bool merge();
   std::vector<Robot> robots() const;
+  Work work() const;
   // The merged graph and places of every placed run (no kept keyframes: the pieces are at a
   // quarter of the resolution, not what a run continued from the session would fuse), and every
   // run's stream as received (Session::streams, its pieces as the map keeps them).
@@ -72,8 +79,10 @@ class FleetMerger {
     SessionMerger::Placement placement;
     std::vector<std::int64_t> slots;   // each graph keyframe's id in corrections_
     std::size_t merged_keyframes = 0;  // those the latest merge placed (their corrections known)
-    std::set<std::uint64_t> fused;     // the frame indices of its pieces fused so far
-    double last_record_at = 0.0;       // steady-clock seconds
+    // Their poses in the merged graph: the next merge looks for its new places near there.
+    SessionMerger::PlacedBefore merged_poses;
+    std::set<std::uint64_t> fused;  // the frame indices of its pieces fused so far
+    double last_record_at = 0.0;    // steady-clock seconds
   };
   struct CameraMap {  // the TSDF of the pieces of one camera
     CameraIntrinsics camera;
@@ -85,6 +94,7 @@ class FleetMerger {
   SessionMerger::PlaceComparisons comparisons_;  // of all merges so far (under merging_)
   mutable std::mutex mutex_;
   std::vector<Robot> robots_;
+  Work work_;
   std::vector<std::unique_ptr<Part>> parts_;  // in arrival order; the first robot's first first
   bool changed_ = false;
   Session merged_;

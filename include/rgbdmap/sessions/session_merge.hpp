@@ -47,6 +47,9 @@ class SessionMerger {
     int placing = 0;                 // agreeing places it was placed by
     int linked_to = -1;              // the session (index) most of them belong to
     std::size_t first_keyframe = 0;  // its keyframes' place in the merged graph
+    // Place pairs (its place, a merged one) this merge compared by appearance for the first
+    // time: what placing and tying it cost (pairs compared before are remembered).
+    std::size_t compared = 0;
   };
 
   // What comparing two places gave (places found by their places alone: a robot's stream). Kept
@@ -69,26 +72,45 @@ class SessionMerger {
     std::set<std::shared_ptr<const PlaceRecognition::Place>> held_;
   };
 
+  // Where an earlier merge put a session's keyframes (the merged graph's poses, first keyframe
+  // first; it may have more keyframes now). A session without kept keyframes that an earlier
+  // merge placed is looked for only near there, as loop closure looks near a keyframe's pose:
+  // each of its places is compared with the merged places within loop.search_radius (and
+  // loop.max_view_angle) of where it would be, the allowance growing with the path walked since
+  // the last keyframe placed; everywhere again only if that no longer places it. A merge then
+  // costs what the robots sent since the last one, not every place against every place.
+  using PlacedBefore = std::vector<Eigen::Isometry3d>;
+
   // `settings`: the first session's effective configuration (tracking, loop and filter keys).
   SessionMerger(const Config& settings, Options options);
   explicit SessionMerger(const Config& settings) : SessionMerger(settings, Options{}) {}
 
   // The merged session (kept keyframes, places and graph of every placed session, anchors and
   // ids renumbered) and where each input was placed.
-  // `comparisons` (may be null): what earlier merges found, kept and added to.
+  // `comparisons` (may be null): what earlier merges found, kept and added to. `before` (empty,
+  // or one per session, empty for those not placed): where an earlier merge put them.
   Session merge(const std::vector<Session>& sessions, std::vector<Placement>& placements,
-                PlaceComparisons* comparisons = nullptr) const;
+                PlaceComparisons* comparisons = nullptr,
+                const std::vector<PlacedBefore>& before = {}) const;
 
  private:
   struct Match;
   // The session's kept keyframes found among the merged places, each with the session's frame
   // it implies.
+  // `compared`: counts the pairs compared anew.
   std::vector<Match> findMatches(const Session& merged, const Session& session,
-                                 PlaceComparisons* comparisons) const;
+                                 PlaceComparisons* comparisons, const PlacedBefore& before,
+                                 std::size_t& compared) const;
   // The same for a session without kept keyframes (streamed by a robot: no images), by its
-  // places: each one looked for among the merged places (PlaceMatcher).
+  // places: each one looked for among the merged places (PlaceMatcher), all of them or (placed
+  // `before`) those near where it would be.
   std::vector<Match> findPlaceMatches(const Session& merged, const Session& session,
-                                      PlaceComparisons* comparisons) const;
+                                      PlaceComparisons* comparisons, const PlacedBefore& before,
+                                      std::size_t& compared) const;
+  // The merged places near where `before` puts each of the session's keyframes (by keyframe;
+  // nearest first).
+  std::vector<std::vector<int>> nearPlaces(const Session& merged, const Session& session,
+                                           const PlacedBefore& before) const;
   std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
   // Where a session placed by `placing` lies in the merged frame (its keyframes' poses), tied
   // there by `links`: the placing places and those of `found` that pass loop closure's checks.
