@@ -24,15 +24,9 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$build_dir" in /*) ;; *) build_dir="$root/$build_dir" ;; esac
-node="$build_dir/ros/rgbdmap_node"
-tum2bag="$build_dir/ros/rgbdmap-tum2bag"
-rgbdmap="$build_dir/rgbdmap"
-merger="$build_dir/ros/rgbdmap_merger"
-for binary in "$node" "$tum2bag" "$rgbdmap" "$merger"; do
-  [ -x "$binary" ] || { echo "fleet_bandwidth.sh: $binary not found; build first" >&2; exit 1; }
-done
 
 source "$root/bench/ros_bench_common.sh"
+ros_binaries "$build_dir" node tum2bag rgbdmap merger
 if [ -z "$tum" ]; then
   tum="$work/walk"
   "$rgbdmap" synth --room 8x6x3 --path walk --frames 360 --seed 1 --out "$tum" >"$work/synth.log" 2>&1 ||

@@ -23,17 +23,10 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$build_dir" in /*) ;; *) build_dir="$root/$build_dir" ;; esac
-node="$build_dir/ros/rgbdmap_node"
-tum2bag="$build_dir/ros/rgbdmap-tum2bag"
-rgbdmap="$build_dir/rgbdmap"
-merger="$build_dir/ros/rgbdmap_merger"
-play="$build_dir/ros/rgbdmap-play"
-for binary in "$node" "$tum2bag" "$rgbdmap" "$merger" "$play"; do
-  [ -x "$binary" ] || { echo "fleet_live.sh: $binary not found; build first" >&2; exit 1; }
-done
 xyz="${RGBDMAP_DATA_DIR:-$root/../shared/data}/tum/rgbd_dataset_freiburg1_xyz"
 
 source "$root/bench/ros_bench_common.sh"
+ros_binaries "$build_dir" node tum2bag rgbdmap merger play
 # The test's walks (tests/test_ros_merger.cpp): robot 2 plays the second lap from frame 180 on.
 synth() {
   "$rgbdmap" synth --out "$1" --path walk --frames 360 "${@:2}" >"$work/synth.log" 2>&1 ||

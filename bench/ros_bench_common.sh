@@ -1,5 +1,20 @@
-# Sourced by the ROS benchmarks: a work folder removed at exit with the processes in `pids`,
-# a roscore of their own on a free port, `wait_for`, and a bag written from a TUM folder.
+# Sourced by the ROS benchmarks: the binaries of a build, a work folder removed at exit with the
+# processes in `pids`, a roscore of their own on a free port, `wait_for`, and a bag written from
+# a TUM folder.
+# ros_binaries BUILD_DIR BINARY...: sets node, tum2bag, rgbdmap, merger and play to the build's
+# programs, and stops naming the first of those given (by variable name) that is not built.
+ros_binaries() {
+  local dir=$1 name
+  shift
+  node="$dir/ros/rgbdmap_node"
+  tum2bag="$dir/ros/rgbdmap-tum2bag"
+  rgbdmap="$dir/rgbdmap"
+  merger="$dir/ros/rgbdmap_merger"
+  play="$dir/ros/rgbdmap-play"
+  for name in "$@"; do
+    [ -x "${!name}" ] || { echo "$(basename "$0"): ${!name} not found; build first" >&2; exit 1; }
+  done
+}
 work=$(mktemp -d)
 pids=()
 cleanup() {

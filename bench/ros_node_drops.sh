@@ -21,13 +21,9 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$build_dir" in /*) ;; *) build_dir="$root/$build_dir" ;; esac
-node="$build_dir/ros/rgbdmap_node"
-tum2bag="$build_dir/ros/rgbdmap-tum2bag"
-for binary in "$node" "$tum2bag"; do
-  [ -x "$binary" ] || { echo "ros_node_drops.sh: $binary not found; build first" >&2; exit 1; }
-done
 
 source "$root/bench/ros_bench_common.sh"
+ros_binaries "$build_dir" node tum2bag
 write_bag "$tum" "$work/camera.bag"
 start_roscore
 
