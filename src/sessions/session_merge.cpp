@@ -115,14 +115,14 @@ std::vector<std::vector<int>> SessionMerger::nearPlaces(const Session& merged,
   const LoopOptions& o = settings_.loop;
   std::vector<std::vector<int>> near(own.size());
   if (before.empty()) return near;
+  double walked = 0.0;  // since the last keyframe placed before
   for (std::size_t k = 0; k < own.size(); ++k) {
     // A keyframe placed before is where it was put; a newer one follows the last placed by its
     // own odometry, and may have drifted since by what its path allows.
     const std::size_t last = std::min(k, before.size() - 1);
+    if (k > last) walked += pathLength(own[k - 1].pose.inverse() * own[k].pose);
+    if (k >= session.graph.places.size() || !session.graph.places[k]) continue;
     const Eigen::Isometry3d x = before[last] * own[last].pose.inverse() * own[k].pose;
-    double walked = 0.0;
-    for (std::size_t j = last + 1; j <= k; ++j)
-      walked += pathLength(own[j - 1].pose.inverse() * own[j].pose);
     const double allowance = o.drift_per_metre * walked;
     std::vector<std::pair<double, int>> found;
     for (std::size_t id = 0; id < merged.graph.places.size(); ++id) {

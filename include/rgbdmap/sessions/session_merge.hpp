@@ -107,8 +107,8 @@ class SessionMerger {
   std::vector<Match> findPlaceMatches(const Session& merged, const Session& session,
                                       PlaceComparisons* comparisons, const PlacedBefore& before,
                                       std::size_t& compared) const;
-  // The merged places near where `before` puts each of the session's keyframes (by keyframe;
-  // nearest first).
+  // The merged places near where `before` puts each of the session's keyframes that has a place
+  // (by keyframe; nearest first).
   std::vector<std::vector<int>> nearPlaces(const Session& merged, const Session& session,
                                            const PlacedBefore& before) const;
   std::optional<std::vector<Match>> agreeing(const std::vector<Match>& matches) const;
