@@ -22,21 +22,13 @@ void ratioMatches(const cv::Mat& a, const cv::Mat& b, std::vector<cv::DMatch>& m
     if (m.size() == 2 && m[0].distance <= 0.8f * m[1].distance) matches.push_back(m[0]);
 }
 
-// The view a place was made from, as the dense aligner samples a frame (a place keeps no
-// image): its reference's finest level drawn into that level's image, each point's intensity
-// and depth at its pixel (the nearest point where two fall on one), then levels finest+1..
-// levels-1 halved from it. The pixels the reference left out (flat ones, every other row and
-// column, and those without depth) take the mean of their drawn neighbours, ring after ring:
-// flat pixels are what their neighbours are, and a candidate's point that lands where the
-// place had no depth still finds an intensity to compare. False: nothing to draw.
-bool drawView(const AlignmentReference& reference, int finest, int levels, ImagePyramid& out) {
-  if (finest >= static_cast<int>(reference.levels.size())) return false;
-  const AlignmentReference::Level& level = reference.levels[static_cast<std::size_t>(finest)];
+// A reference level's points drawn into its image: each point's intensity and depth spread over
+// its four nearest pixels by bilinear weights (a place seen from elsewhere does not fall on pixel
+// centres), among the points nearest the camera there. `drawn`: 1 where a pixel got enough of
+// some point, else 0 (and 0 grey and depth).
+void drawPoints(const AlignmentReference::Level& level, cv::Mat& gray, cv::Mat& depth,
+                cv::Mat& drawn) {
   const LevelCamera& c = level.camera;
-  if (level.points.empty() || c.width < 4 || c.height < 4) return false;
-  // Each point spread over its four nearest pixels by bilinear weights (a place seen from
-  // elsewhere does not fall on pixel centres), among the points nearest the camera there.
-  cv::Mat nearest(c.height, c.width, CV_32FC1, cv::Scalar(0));
   const auto pixelOf = [&c](const Eigen::Vector4f& p, float& u, float& v) {
     if (!(p.z() > 0.0f)) return false;
     u = c.fx * p.x() / p.z() + c.cx;
@@ -44,6 +36,7 @@ bool drawView(const AlignmentReference& reference, int finest, int levels, Image
     return u >= 0.0f && v >= 0.0f && u <= static_cast<float>(c.width - 1) &&
            v <= static_cast<float>(c.height - 1);
   };
+  cv::Mat nearest(c.height, c.width, CV_32FC1, cv::Scalar(0));
   float u = 0, v = 0;
   for (const Eigen::Vector4f& p : level.points) {
     if (!pixelOf(p, u, v)) continue;
@@ -51,9 +44,9 @@ bool drawView(const AlignmentReference& reference, int finest, int levels, Image
         nearest.at<float>(static_cast<int>(std::lround(v)), static_cast<int>(std::lround(u)));
     if (z == 0.0f || p.z() < z) z = p.z();
   }
-  cv::Mat gray(c.height, c.width, CV_32FC1, cv::Scalar(0)),
-      depth(c.height, c.width, CV_32FC1, cv::Scalar(0)),
-      drawn(c.height, c.width, CV_32FC1, cv::Scalar(0));
+  gray = cv::Mat(c.height, c.width, CV_32FC1, cv::Scalar(0));
+  depth = cv::Mat(c.height, c.width, CV_32FC1, cv::Scalar(0));
+  drawn = cv::Mat(c.height, c.width, CV_32FC1, cv::Scalar(0));
   for (const Eigen::Vector4f& p : level.points) {
     if (!pixelOf(p, u, v)) continue;
     const int x0 = std::min(static_cast<int>(u), c.width - 2),
@@ -80,25 +73,43 @@ bool drawView(const AlignmentReference& reference, int finest, int levels, Image
       depth.at<float>(y, x) /= w;
       w = 1.0f;
     }
+}
+
+// The pixels not drawn take the mean grey of their drawn neighbours, ring after ring, until every
+// pixel has one: flat pixels (the reference keeps every other row and column of them) are what
+// their neighbours are, and a point that lands where nothing was drawn still finds an intensity.
+void fillFromNeighbours(cv::Mat& gray, cv::Mat& drawn) {
   cv::Mat sum, count;
-  for (int ring = 0; ring < c.width + c.height &&
+  for (int ring = 0; ring < gray.cols + gray.rows &&
                      static_cast<std::size_t>(cv::countNonZero(drawn)) < gray.total();
        ++ring) {
     cv::boxFilter(gray, sum, -1, cv::Size(3, 3), cv::Point(-1, -1), false);
     cv::boxFilter(drawn, count, -1, cv::Size(3, 3), cv::Point(-1, -1), false);
-    for (int y = 0; y < c.height; ++y) {
+    for (int y = 0; y < gray.rows; ++y) {
       float* g = gray.ptr<float>(y);
       float* d = drawn.ptr<float>(y);
       const float* s = sum.ptr<float>(y);
       const float* n = count.ptr<float>(y);
-      for (int x = 0; x < c.width; ++x)
+      for (int x = 0; x < gray.cols; ++x)
         if (d[x] == 0.0f && n[x] > 0.0f) {
           g[x] = s[x] / n[x];
           d[x] = 1.0f;
         }
     }
   }
-  out.buildFromLevel(gray, depth, c, finest, levels);
+}
+
+// The view a place was made from, as the dense aligner samples a frame (a place keeps no
+// image): its reference's finest level drawn and filled, then levels finest+1..levels-1 halved
+// from it (depth only where drawn). False: nothing to draw.
+bool drawView(const AlignmentReference& reference, int finest, int levels, ImagePyramid& out) {
+  if (finest >= static_cast<int>(reference.levels.size())) return false;
+  const AlignmentReference::Level& level = reference.levels[static_cast<std::size_t>(finest)];
+  if (level.points.empty() || level.camera.width < 4 || level.camera.height < 4) return false;
+  cv::Mat gray, depth, drawn;
+  drawPoints(level, gray, depth, drawn);
+  fillFromNeighbours(gray, drawn);
+  out.buildFromLevel(gray, depth, level.camera, finest, levels);
   return true;
 }
 
