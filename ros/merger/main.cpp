@@ -259,7 +259,10 @@ int runMerger() {
   std::atomic<bool> map_stale{resumed}, stopping{false};
   std::thread map_thread([&] {
     while (!stopping.load()) {
-      if (map_stale.exchange(false))
+      // Fused and published only while someone listens: the fusion is most of the merger's
+      // work, and a save fuses what is left. (Latched: whoever subscribes later gets the last
+      // one, and a newer one once anything changed.)
+      if (map_pub.getNumSubscribers() > 0 && map_stale.exchange(false))
         map_pub.publish(toCloudMessage(merger.map(), s.merged_frame, ros::Time::now().toSec()));
       ros::WallDuration(std::max(0.05, s.map_interval)).sleep();
     }

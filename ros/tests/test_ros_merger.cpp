@@ -4,10 +4,12 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <atomic>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -164,10 +166,17 @@ class RosMerger : public RosTest {
   }
 
   // The merger restarted from what it saved (a copy), with no robot running any more: it picks
-  // up every robot's part, robot 2's too, and places them again.
+  // up every robot's part, robot 2's too, and places them again; its merged map is fused and
+  // published once someone listens (nobody did before: the first merger fused at its save only).
   void restartTheMergerFromItsSave() {
     std::filesystem::copy(dir_ + "/merged.session", dir_ + "/restarted.session",
                           std::filesystem::copy_options::recursive);
+    std::atomic<std::size_t> merged_points{0};
+    ros::NodeHandle nh;
+    const ros::Subscriber map_sub = nh.subscribe<sensor_msgs::PointCloud2>(
+        "/merged/map", 1, [&](const sensor_msgs::PointCloud2::ConstPtr& m) {
+          merged_points.store(static_cast<std::size_t>(m->width) * m->height);
+        });
     const std::string log = dir_ + "/restarted.log";
     const auto again = startMerger(dir_ + "/restarted.pcd", log);
     // (Its start-up line comes once it is up: then it is stopped.)
@@ -182,6 +191,7 @@ class RosMerger : public RosTest {
       EXPECT_NE(readFile(log).find("2 robots placed"), std::string::npos) << readFile(log);
       EXPECT_TRUE(waitForRobot2sTf(up));
     }
+    EXPECT_TRUE(waitUntil([&] { return merged_points.load() > 10000; }, 120)) << readFile(log);
     again->signal(SIGINT);
     ASSERT_EQ(again->wait(60), 0) << readFile(log);
   }
