@@ -94,7 +94,6 @@ bool FleetMerger::merge() {
   for (std::size_t i = 0; i < order.size(); ++i) {
     order[i]->placed = placements[i].placed;
     order[i]->placement = placements[i];
-    order[i]->merged_keyframes = placements[i].placed ? sessions[i].graph.keyframes.size() : 0;
     order[i]->merged_poses.clear();
     if (!placements[i].placed) continue;
     for (std::size_t k = 0; k < sessions[i].graph.keyframes.size(); ++k) {
@@ -200,7 +199,7 @@ MapCloud FleetMerger::map() {
         // Anchored to a keyframe whose correction is known (-1: tracked from the first
         // keyframe, which its robot's graph holds still: the first's correction moves it).
         const std::int64_t node = std::max<std::int64_t>(piece.anchor, 0);
-        if (node >= static_cast<std::int64_t>(part->merged_keyframes)) continue;
+        if (node >= static_cast<std::int64_t>(part->merged_poses.size())) continue;
         // The mapper keeps it from now on (a piece sent again is not fused twice).
         part->stream.forgetMapPiece(piece.index);
         if (!part->fused.insert(piece.index).second) continue;

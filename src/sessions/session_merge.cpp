@@ -127,12 +127,9 @@ std::vector<std::vector<int>> SessionMerger::nearPlaces(const Session& merged,
     std::vector<std::pair<double, int>> found;
     for (std::size_t id = 0; id < merged.graph.places.size(); ++id) {
       if (!merged.graph.places[id]) continue;
-      const Eigen::Isometry3d& xj = merged.graph.keyframes[id].pose;
-      const double distance = (xj.translation() - x.translation()).norm();
-      if (distance > o.search_radius + allowance) continue;
-      const double cosine = std::clamp(xj.linear().col(2).dot(x.linear().col(2)), -1.0, 1.0);
-      if (std::acos(cosine) > o.max_view_angle + allowance) continue;
-      found.emplace_back(distance, static_cast<int>(id));
+      if (const auto distance =
+              loopSearchDistance(x, merged.graph.keyframes[id].pose, allowance, o))
+        found.emplace_back(*distance, static_cast<int>(id));
     }
     std::sort(found.begin(), found.end());
     for (const auto& f : found) near[k].push_back(f.second);

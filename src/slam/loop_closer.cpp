@@ -79,14 +79,13 @@ void LoopCloser::addKeyframe(TrackedKeyframe keyframe) {
     // graph without a search, not this one. Where the camera is now is where a loop is about to
     // close (a lap's end, seen twice in a row for the loop to be accepted), and the newest
     // keyframes are the ones searched after the camera stops.
-    std::size_t with_images = 0;
-    for (const TrackedKeyframe& k : queue_) with_images += k.color.empty() ? 0 : 1;
-    for (TrackedKeyframe& k : queue_) {
-      if (with_images < kMaxQueued) break;
-      if (k.color.empty()) continue;
-      k.color.release();
-      k.depth.release();
-      --with_images;
+    // (Keyframes come one at a time: one gives way at most.)
+    const auto has_images = [](const TrackedKeyframe& k) { return !k.color.empty(); };
+    if (static_cast<std::size_t>(std::count_if(queue_.begin(), queue_.end(), has_images)) >=
+        kMaxQueued) {
+      TrackedKeyframe& oldest = *std::find_if(queue_.begin(), queue_.end(), has_images);
+      oldest.color.release();
+      oldest.depth.release();
       stats_.loop_keyframes_unsearched.fetch_add(1, std::memory_order_relaxed);
     }
   }
@@ -239,21 +238,16 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
 
 std::vector<int> LoopCloser::candidatesFor(int id) const {
   const Eigen::Isometry3d x = graph_.pose(id);
-  const Eigen::Vector3d axis = x.linear().col(2);
   const double walked = nodes_[static_cast<std::size_t>(id)].walked;
   std::vector<std::pair<double, int>> near;
   // Until the run joins a saved map, its own keyframes only: the saved ones are in another frame.
   for (int j = joined() ? 0 : first_own_; j + options_.recent_keyframes < id; ++j) {
     if (!places_.described(j)) continue;
-    const Eigen::Isometry3d xj = graph_.pose(j);
     // (A saved keyframe may be further along the path than this run's: its walk came first.)
     const double allowance =
         options_.drift_per_metre * std::abs(walked - nodes_[static_cast<std::size_t>(j)].walked);
-    const double distance = (xj.translation() - x.translation()).norm();
-    if (distance > options_.search_radius + allowance) continue;
-    const double cosine = std::clamp(xj.linear().col(2).dot(axis), -1.0, 1.0);
-    if (std::acos(cosine) > options_.max_view_angle + allowance) continue;
-    near.emplace_back(distance, j);
+    if (const auto distance = loopSearchDistance(x, graph_.pose(j), allowance, options_))
+      near.emplace_back(*distance, j);
   }
   std::sort(near.begin(), near.end());
   if (near.size() > kMaxCompared) near.resize(kMaxCompared);

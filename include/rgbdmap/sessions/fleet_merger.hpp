@@ -77,9 +77,9 @@ class FleetMerger {
     SessionAssembler stream;
     bool placed = false;
     SessionMerger::Placement placement;
-    std::vector<std::int64_t> slots;   // each graph keyframe's id in corrections_
-    std::size_t merged_keyframes = 0;  // those the latest merge placed (their corrections known)
-    // Their poses in the merged graph: the next merge looks for its new places near there.
+    std::vector<std::int64_t> slots;  // each graph keyframe's id in corrections_
+    // The poses in the merged graph of the keyframes the latest merge placed (their corrections
+    // are known; none when it was not placed): the next merge looks for new places near there.
     SessionMerger::PlacedBefore merged_poses;
     std::set<std::uint64_t> fused;  // the frame indices of its pieces fused so far
     double last_record_at = 0.0;    // steady-clock seconds

@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "rgbdmap/slam/loop_options.hpp"
 
@@ -50,6 +52,19 @@ inline bool placementsAgree(const Eigen::Isometry3d& a, const Eigen::Isometry3d&
   const Eigen::Isometry3d change = a.inverse() * b;
   return change.translation().norm() <= loop.consistent_translation + allowance &&
          rotationAngle(change) <= loop.consistent_rotation + allowance;
+}
+
+// How far a keyframe at `earlier` is from one at `later`, when it is near enough to be compared
+// for a loop: within loop.search_radius and looking within loop.max_view_angle of the same way,
+// both grown by `allowance` (the drift the path between them allows). None: too far.
+inline std::optional<double> loopSearchDistance(const Eigen::Isometry3d& later,
+                                                const Eigen::Isometry3d& earlier, double allowance,
+                                                const LoopOptions& loop) {
+  const double distance = (earlier.translation() - later.translation()).norm();
+  if (distance > loop.search_radius + allowance) return std::nullopt;
+  const double cosine = std::clamp(earlier.linear().col(2).dot(later.linear().col(2)), -1.0, 1.0);
+  if (std::acos(cosine) > loop.max_view_angle + allowance) return std::nullopt;
+  return distance;
 }
 
 // The calling thread gives way to tracking and fusion when two cores are short (Linux: niceness
