@@ -191,6 +191,7 @@ int main(int argc, char** argv) {
   rgbdmap::addViewCommand(app, selected);
   rgbdmap::addSessionCommand(app, selected);
   rgbdmap::addMergeCommand(app, selected);
+  rgbdmap::addExportCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

@@ -57,6 +57,7 @@ std::string RunStats::toJson() const {
       << "  \"map_points\": " << map_points << ",\n"
       << "  \"checkpoints_written\": " << checkpoints_written << ",\n"
       << "  \"checkpoints_failed\": " << checkpoints_failed << ",\n"
+      << "  \"store_bytes_written\": " << store_bytes_written << ",\n"
       << "  \"disconnects\": " << disconnects << ",\n"
       << "  \"frames_tracked\": " << frames_tracked << ",\n"
       << "  \"frames_lost\": " << frames_lost << ",\n"
@@ -103,7 +104,8 @@ std::string RunStats::toJson() const {
   latency("mesh_extract", mesh_extract_latency, false);
   latency("mesh_write", mesh_write_latency, false);
   latency("grid_write", grid_write_latency, false);
-  latency("octomap_write", octomap_write_latency, true);
+  latency("octomap_write", octomap_write_latency, false);
+  latency("store_write", store_write_latency, true);
   out << "  }\n}\n";
   return out.str();
 }

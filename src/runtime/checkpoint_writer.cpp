@@ -11,8 +11,10 @@
 
 namespace rgbdmap {
 
-CheckpointWriter::CheckpointWriter(Callback on_done)
-    : on_done_(std::move(on_done)), thread_([this] { run(); }) {}
+CheckpointWriter::CheckpointWriter(Callback on_done, const std::string& store_path)
+    : on_done_(std::move(on_done)),
+      store_(store_path.empty() ? nullptr : std::make_unique<MapStore>(store_path)),
+      thread_([this] { run(); }) {}
 
 CheckpointWriter::~CheckpointWriter() {
   {
@@ -100,12 +102,24 @@ void CheckpointWriter::writeOctomap(const MapCloud& cloud, const OctomapFile& oc
 void CheckpointWriter::writeSessionFile(const SessionFile& session, Result& result) {
   const auto start = std::chrono::steady_clock::now();
   std::string error;
-  if (writeSession(*session.session, session.path, error, &result.session_bytes)) {
+  if (writeSession(*session.session, session.path, error, &result.session_bytes,
+                   &session_images_)) {
     result.session_path = session.path;
+    result.session_images_written = session_images_.appended;
   } else {
     addFailure(result, "session " + error);
   }
   result.session_seconds = secondsSince(start);
+}
+
+void CheckpointWriter::writeStore(const MapCloud& cloud, Result& result) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string error;
+  if (store_->write(cloud, result.store, error))
+    result.store_path = store_->path();
+  else
+    addFailure(result, "map store " + error);
+  result.store_seconds = secondsSince(start);
 }
 
 void CheckpointWriter::run() {
@@ -133,16 +147,21 @@ void CheckpointWriter::run() {
     result.path = path;
     result.points = cloud->size();
     const auto start = std::chrono::steady_clock::now();
-    // No path: a run that maps nothing (localisation) writes only its trajectories.
+    // No path: the map goes to the store alone, or a run that maps nothing (localisation)
+    // writes only its trajectories.
     result.ok = path.empty() || writePcdAtomically(*cloud, path, result.error);
     // The destination still holds the last complete map (or nothing): say which.
-    if (result.ok)
+    if (path.empty()) {
+      // Nothing asked of the PCD this time.
+    } else if (result.ok) {
       last_good_ = result;
-    else if (last_good_.ok && last_good_.path == path)
+    } else if (last_good_.ok && last_good_.path == path) {
       result.error += "; the last good map (" + std::to_string(last_good_.points) +
                       " points) is still complete at " + path;
-    else
+    } else {
       result.error += "; no complete map has been written to " + path + " yet";
+    }
+    if (store_) writeStore(*cloud, result);
     if (!grid.path.empty()) writeGrid(*cloud, grid, result);
     if (octomap.free_space) writeOctomap(*cloud, octomap, result);
     // The snapshot (18 MB for a room) goes before the rest is written: the session alone takes

@@ -25,6 +25,7 @@ PipelineOutputs outputsBeside(const std::string& map_path, const std::string& me
   outputs.frame_trajectory_path = stem(map_path) + "_trajectory.txt";
   outputs.config_path = stem(map_path) + ".yaml";
   outputs.session_path = sessionPathOf(map_path);
+  outputs.store_path = storePathOf(map_path);
   outputs.mesh_path = mesh_path;
   return outputs;
 }
@@ -34,10 +35,13 @@ PipelineOutputs localisationOutputs(const std::string& map_path) {
   outputs.map_path.clear();
   outputs.trajectory_path.clear();  // no keyframes are fused
   outputs.session_path.clear();
+  outputs.store_path.clear();
   return outputs;
 }
 
 std::string sessionPathOf(const std::string& map_path) { return stem(map_path) + ".session"; }
+
+std::string storePathOf(const std::string& map_path) { return stem(map_path) + ".store"; }
 
 std::string picturePathOf(const std::string& map_path) { return stem(map_path) + ".png"; }
 
@@ -48,6 +52,8 @@ std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs) {
   std::vector<std::string> files;
   for (const std::string* path : {&outputs.map_path, &outputs.mesh_path, &outputs.octomap_path})
     if (!path->empty()) files.push_back(temporaryFileOf(*path));
+  if (!outputs.store_path.empty())
+    files.push_back(temporaryFileOf(outputs.store_path + "/index.bin"));
   if (!outputs.grid_path.empty()) {
     files.push_back(temporaryFileOf(outputs.grid_path));
     files.push_back(temporaryFileOf(gridYamlPath(outputs.grid_path)));

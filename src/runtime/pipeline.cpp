@@ -168,16 +168,27 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
                    r.mesh_seconds);
     }
     if (!r.session_path.empty())
-      spdlog::info("session: {:.1f} MB written to {} in {:.2f} s",
+      spdlog::info("session: {:.1f} MB written to {} in {:.2f} s ({:.1f} MB of new images)",
                    static_cast<double>(r.session_bytes) / (1024.0 * 1024.0), r.session_path,
-                   r.session_seconds);
+                   r.session_seconds,
+                   static_cast<double>(r.session_images_written) / (1024.0 * 1024.0));
+    if (!r.store_path.empty()) {
+      stats.store_write_latency.record(r.store_seconds);
+      stats.store_bytes_written.fetch_add(r.store.bytes);
+    }
     if (r.ok) {
       stats.checkpoints_written.fetch_add(1);
-      if (r.path.empty())  // localising: the trajectories alone
-        spdlog::info("checkpoint: trajectories written in {:.2f} s", r.seconds);
-      else
+      if (!r.path.empty())
         spdlog::info("checkpoint: {} points written to {} in {:.2f} s", r.points, r.path,
                      r.seconds);
+      else if (!r.store_path.empty())
+        spdlog::info(
+            "checkpoint: {} points, {} of {} cells changed ({} gone), {:.1f} MB written to {} in "
+            "{:.2f} s",
+            r.points, r.store.changed, r.store.cells, r.store.removed,
+            static_cast<double>(r.store.bytes) / (1024.0 * 1024.0), r.store_path, r.seconds);
+      else  // localising: the trajectories alone
+        spdlog::info("checkpoint: trajectories written in {:.2f} s", r.seconds);
     } else {
       stats.checkpoints_failed.fetch_add(1);
       spdlog::error("checkpoint failed, mapping goes on: {}", r.error);
@@ -255,7 +266,8 @@ int Pipeline::run(RunControl& control) {
   FrameQueue queue(static_cast<std::size_t>(config.queue.capacity),
                    live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock, camera.width,
                    camera.height);
-  CheckpointWriter writer(reportWrites(stats_, outputs_.mesh_path, outputs_.grid_path));
+  CheckpointWriter writer(reportWrites(stats_, outputs_.mesh_path, outputs_.grid_path),
+                          config.checkpoint.store ? outputs_.store_path : "");
   FirstError error;
   const auto fail = [&error, &control](const std::string& message) {
     error.set(message);
@@ -269,11 +281,13 @@ int Pipeline::run(RunControl& control) {
   MapPublication publication(outputs_.publisher);
   FusionThread fusion(mapper, kFusionSlots, camera.width, camera.height, fail);
   // Checkpoints: the fusion thread takes the map snapshot and hands it to the writer, which
-  // writes the trajectories recorded so far beside it.
-  auto checkpoint = [&] {
-    fusion.request(MapRequest::kCheckpoint, [&](const Mapper& m) {
+  // writes the trajectories recorded so far beside it. With a map store, the PCD is written when
+  // asked for (and at the end); the store takes what changed at every checkpoint.
+  auto checkpoint = [&](bool asked) {
+    const std::string pcd = asked || !writer.hasStore() ? outputs_.map_path : "";
+    fusion.request(MapRequest::kCheckpoint, [&, pcd](const Mapper& m) {
       writer.submit(
-          m.snapshot(), outputs_.map_path, trajectories.files, meshFile(outputs_, m, stats_),
+          m.snapshot(), pcd, trajectories.files, meshFile(outputs_, m, stats_),
           gridFile(outputs_, m, config), octomapFile(outputs_, m),
           sessionFile(outputs_, m, loop.loop_closer.get(), trajectories, config, configuration));
     });

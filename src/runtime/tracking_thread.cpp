@@ -48,8 +48,9 @@ void TrackingThread::run() {
                             [&publication](const Mapper& m) { publication.publishMap(m); });
     }
     const std::uint64_t keyframes = parts_.tracker.keyframesAccepted();
-    if (control_.snapshot.exchange(false) || checkpointDue(keyframes)) {
-      checkpoint_();
+    const bool asked = control_.snapshot.exchange(false);
+    if (asked || checkpointDue(keyframes)) {
+      checkpoint_(asked);
       keyframes_at_checkpoint_ = keyframes;
       last_checkpoint_ = steadySeconds();
     }

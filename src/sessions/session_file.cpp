@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -30,12 +32,14 @@ constexpr const char* kConfigFile = "config.yaml";
 constexpr const char* kGraphFile = "graph.bin";
 constexpr const char* kPlacesFile = "places.bin";
 constexpr const char* kKeyframesFile = "keyframes.bin";
+constexpr const char* kImagesFile = "images.bin";
 constexpr const char* kStreamsFile = "streams.bin";
 constexpr const char* kFramesFile = "frames.anchored";
 constexpr const char* kFusedFile = "keyframes.anchored";
 constexpr char kGraphKind[5] = "GRPH";
 constexpr char kPlacesKind[5] = "PLCS";
-constexpr char kKeyframesKind[5] = "KFRM";
+constexpr char kKeyframesKind[5] = "KFRM";      // images inside (sessions before images.bin)
+constexpr char kKeyframeIndexKind[5] = "KFIX";  // images in images.bin
 constexpr char kStreamsKind[5] = "STRM";
 
 // The graph's keyframes and edges, counted into `summary`, from a saved graph or a live one.
@@ -144,34 +148,123 @@ void readPlaces(BinaryReader in, Session& s) {
   s.graph.places.resize(s.graph.keyframes.size());
 }
 
-void putBlob(RecordWriter& out, const std::shared_ptr<const std::vector<std::uint8_t>>& blob) {
-  const std::size_t size = blob ? blob->size() : 0;
-  out.put<std::uint64_t>(size);
-  if (size > 0) out.putBytes(blob->data(), size);
-}
-
 std::shared_ptr<const std::vector<std::uint8_t>> getBlob(BinaryReader& in) {
   std::vector<std::uint8_t> blob(in.count(1));
   in.getBytes(blob.data(), blob.size());
   return std::make_shared<const std::vector<std::uint8_t>>(std::move(blob));
 }
 
-void writeKeyframes(const Session& s, RecordWriter& out, SessionSummary& summary) {
+// A kept keyframe's images: in memory, or the bytes its scratch file holds.
+std::uint64_t imageBytesOf(const KeyframeStore::Entry& e) {
+  return e.on_disk ? e.depth_bytes + e.colour_bytes : e.imageBytes();
+}
+
+// The kept keyframes' images into `file` (images.bin): after those of the last session written
+// at `path` when `log` knows them (the file linked, not copied), else all of them. `at` gets
+// where each kept keyframe's are; `next` what the log becomes once the session is in place.
+bool writeImages(const Session& s, const std::string& path, const std::string& file,
+                 const SessionImages* log, std::vector<SessionImages::At>& at, SessionImages& next,
+                 std::string& error) {
+  std::uint64_t kept = 0;
+  for (const KeyframeStore::Entry& e : s.keyframes) kept += imageBytesOf(e);
+  bool linked = false;
+  const std::string last = path + "/" + kImagesFile;
+  struct stat st {};
+  if (log != nullptr && log->session == path && ::stat(last.c_str(), &st) == 0 &&
+      st.st_ino == log->inode && static_cast<std::uint64_t>(st.st_size) >= log->bytes &&
+      log->bytes <= 2 * kept + (64u << 20))
+    linked = ::link(last.c_str(), file.c_str()) == 0;
+  const int fd =
+      ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (linked ? 0 : O_TRUNC), 0644);
+  std::uint64_t end = linked ? log->bytes : 0;
+  // What a failed write of an earlier session left past the end its index knows goes.
+  bool ok = fd >= 0 && ::ftruncate(fd, static_cast<off_t>(end)) == 0 &&
+            ::lseek(fd, static_cast<off_t>(end), SEEK_SET) >= 0;
+  next.by_id.clear();
+  next.appended = 0;
+  at.clear();
+  try {
+    for (const KeyframeStore::Entry& e : s.keyframes) {
+      if (!ok) break;
+      const auto known = linked ? log->by_id.find(e.id) : next.by_id.end();
+      if (linked && known != log->by_id.end()) {
+        at.push_back(known->second);
+      } else {
+        const auto depth = e.depthImage();  // read back from disk for the time of writing it
+        const auto colour = e.colourImage();
+        at.push_back({end, depth->size(), colour->size()});
+        ok = writeAll(fd, reinterpret_cast<const char*>(depth->data()), depth->size()) &&
+             writeAll(fd, reinterpret_cast<const char*>(colour->data()), colour->size());
+        end += depth->size() + colour->size();
+        next.appended += depth->size() + colour->size();
+      }
+      next.by_id[e.id] = at.back();
+    }
+  } catch (const std::runtime_error& e) {
+    error = file + ": " + e.what();
+    if (fd >= 0) ::close(fd);
+    return false;
+  }
+  ok = ok && ::fdatasync(fd) == 0 && ::fstat(fd, &st) == 0;
+  if (!ok) error = file + ": cannot write: " + std::strerror(errno);
+  if (fd >= 0) ::close(fd);
+  next.session = path;
+  next.inode = st.st_ino;
+  next.bytes = end;
+  return ok;
+}
+
+void writeKeyframeIndex(const Session& s, const std::vector<SessionImages::At>& at,
+                        RecordWriter& out, SessionSummary& summary) {
   out.put<double>(KeyframeStore::kInverseDepthUnits);
   out.put<std::int32_t>(KeyframeStore::kColourBitsDropped);
   summary.kept_keyframes = s.keyframes.size();
   out.put<std::uint64_t>(s.keyframes.size());
-  for (const KeyframeStore::Entry& e : s.keyframes) {
+  for (std::size_t i = 0; i < s.keyframes.size(); ++i) {
+    const KeyframeStore::Entry& e = s.keyframes[i];
     out.put(e.timestamp);
     out.put<std::uint64_t>(e.index);
     out.put<std::int64_t>(e.anchor);
     putPose(out, e.pose);
     putPose(out, e.fused_at);
-    putBlob(out, e.depthImage());  // read back from disk for the time of writing it
-    putBlob(out, e.colourImage());
+    out.put(at[i]);
   }
 }
 
+void readKeyframeIndex(BinaryReader in, Session& s, const std::string& images_path) {
+  if (in.get<double>() != KeyframeStore::kInverseDepthUnits ||
+      in.get<std::int32_t>() != KeyframeStore::kColourBitsDropped)
+    in.fail("images stored with another depth or colour encoding than this rgbdmap's");
+  std::ifstream images(images_path, std::ios::binary);
+  if (!images) throw InputError(images_path + ": cannot open (" + std::strerror(errno) + ")");
+  std::error_code ec;
+  const std::uint64_t images_bytes = fs::file_size(images_path, ec);
+  const auto blob = [&](std::uint64_t offset, std::uint64_t size) {
+    std::vector<std::uint8_t> bytes(size);
+    if (offset > images_bytes || size > images_bytes - offset || !images.seekg(offset) ||
+        !images.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
+      throw InputError(images_path + ": truncated (" + std::to_string(images_bytes) +
+                       " bytes; keyframes.bin names an image at byte " + std::to_string(offset) +
+                       ")");
+    return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
+  };
+  s.keyframes.resize(in.count(8 + 8 + 8 + 2 * 12 * 8 + sizeof(SessionImages::At)));
+  for (KeyframeStore::Entry& e : s.keyframes) {
+    e.timestamp = in.get<double>();
+    e.index = in.get<std::uint64_t>();
+    e.anchor = in.get<std::int64_t>();
+    e.pose = getPose(in);
+    e.fused_at = getPose(in);
+    const auto at = in.get<SessionImages::At>();
+    e.depth_png = blob(at.offset, at.depth_bytes);
+    e.colour_png = blob(at.offset + at.depth_bytes, at.colour_bytes);
+    if (e.anchor < -1)
+      in.fail("corrupt (a kept keyframe anchored to " + std::to_string(e.anchor) + ")");
+  }
+  if (!in.atEnd()) in.fail("corrupt (bytes after the keyframes)");
+}
+
+// A session written before images.bin: each kept keyframe's images inside keyframes.bin.
 void readKeyframes(BinaryReader in, Session& s) {
   if (in.get<double>() != KeyframeStore::kInverseDepthUnits ||
       in.get<std::int32_t>() != KeyframeStore::kColourBitsDropped)
@@ -328,7 +421,7 @@ SessionSummary summarise(const Session& s, const std::string& path) {
 }
 
 bool writeSession(const Session& session, const std::string& path, std::string& error,
-                  std::uint64_t* bytes) {
+                  std::uint64_t* bytes, SessionImages* images) {
   const std::string fresh = temporaryFileOf(path);
   std::error_code ec;
   fs::remove_all(fresh, ec);
@@ -340,29 +433,36 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   const auto in = [&fresh](const char* name) { return fresh + "/" + name; };
   SessionSummary summary;  // counted as written
   // Each record streamed to its file (the kept keyframes' images are tens of MB: never copied).
-  const auto record = [&](const char* name, const char(&kind)[5],
-                          void (*write)(const Session&, RecordWriter&, SessionSummary&)) {
-    // A kept keyframe's images read back from disk may fail (the scratch file's disk gone).
-    std::string unreadable;
-    const bool written = writeFileAtomically(
-        in(name),
-        [&](int fd) {
-          try {
-            RecordWriter out(fd, kind, Session::kFormatVersion);
-            write(session, out, summary);
-            return out.finish();
-          } catch (const std::runtime_error& e) {
-            unreadable = e.what();
-            return false;
-          }
-        },
-        error);
-    if (!unreadable.empty()) error = in(name) + ": " + unreadable;
-    return written;
+  const auto record =
+      [&](const char* name, const char(&kind)[5],
+          const std::function<void(const Session&, RecordWriter&, SessionSummary&)>& write) {
+        // A kept keyframe's images read back from disk may fail (the scratch file's disk gone).
+        std::string unreadable;
+        const bool written = writeFileAtomically(
+            in(name),
+            [&](int fd) {
+              try {
+                RecordWriter out(fd, kind, Session::kFormatVersion);
+                write(session, out, summary);
+                return out.finish();
+              } catch (const std::runtime_error& e) {
+                unreadable = e.what();
+                return false;
+              }
+            },
+            error);
+        if (!unreadable.empty()) error = in(name) + ": " + unreadable;
+        return written;
+      };
+  std::vector<SessionImages::At> at;
+  SessionImages next;
+  const auto keyframeIndex = [&at](const Session& s, RecordWriter& out, SessionSummary& summary) {
+    writeKeyframeIndex(s, at, out, summary);
   };
   const bool written =
       record(kGraphFile, kGraphKind, writeGraph) && record(kPlacesFile, kPlacesKind, writePlaces) &&
-      record(kKeyframesFile, kKeyframesKind, writeKeyframes) &&
+      writeImages(session, path, in(kImagesFile), images, at, next, error) &&
+      record(kKeyframesFile, kKeyframeIndexKind, keyframeIndex) &&
       (session.streams.empty() || record(kStreamsFile, kStreamsKind, writeStreams)) &&
       writeTrajectory(in(kFramesFile), session.frames, session.frames_spool, error) &&
       writeTrajectory(in(kFusedFile), session.fused, session.fused_spool, error) &&
@@ -386,6 +486,7 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   if (exists) fs::remove_all(fresh, ec);
   syncFolder(fs::absolute(path).parent_path().string());
   if (bytes) *bytes = folderBytes(path);
+  if (images) *images = std::move(next);
   return true;
 }
 
@@ -407,7 +508,12 @@ Session readSession(const std::string& path) {
   }
   readGraph(openRecord(in(kGraphFile), kGraphKind, Session::kFormatVersion), session);
   readPlaces(openRecord(in(kPlacesFile), kPlacesKind, Session::kFormatVersion), session);
-  readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
+  // Since images.bin, keyframes.bin is an index into it; before, it held the images.
+  if (fs::exists(in(kImagesFile), ec))
+    readKeyframeIndex(openRecord(in(kKeyframesFile), kKeyframeIndexKind, Session::kFormatVersion),
+                      session, in(kImagesFile));
+  else
+    readKeyframes(openRecord(in(kKeyframesFile), kKeyframesKind, Session::kFormatVersion), session);
   if (fs::exists(in(kStreamsFile), ec))
     readStreams(openRecord(in(kStreamsFile), kStreamsKind, Session::kFormatVersion), session);
   session.frames = readTrajectory(in(kFramesFile));

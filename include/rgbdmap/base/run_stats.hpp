@@ -40,6 +40,7 @@ struct RunStats {
   std::atomic<std::uint64_t> place_bytes{0};        // loop closure's place database
   std::atomic<std::uint64_t> checkpoints_written{0};
   std::atomic<std::uint64_t> checkpoints_failed{0};
+  std::atomic<std::uint64_t> store_bytes_written{0};  // to the map store, all saves together
   std::atomic<std::uint64_t> queue_depth{0};
   std::atomic<std::uint64_t> disconnects{0};
   // Tracking, per frame: a pose good to map, tracking failed (the frame keeps the predicted pose
@@ -90,6 +91,7 @@ struct RunStats {
   LatencyHistogram mesh_write_latency;
   LatencyHistogram grid_write_latency;     // floor found, grid drawn and written (writer thread)
   LatencyHistogram octomap_write_latency;  // OctoMap built and written (writer thread)
+  LatencyHistogram store_write_latency;    // the map's changes to its store (writer thread)
   std::atomic<std::uint64_t> mesh_triangles{0};  // in the last mesh written
   double map_memory_mb = 0.0;      // the map at the end: TSDF blocks and index, kept keyframes
   double kept_keyframes_mb = 0.0;  // of which the kept keyframes' images (loop closure)

@@ -20,6 +20,7 @@ struct CheckpointOptions {
   double every_seconds = 60;  // 0 = off
   double min_seconds = 10;    // between checkpoints by keyframe count
   bool session = true;        // MAP.session/ with every save (with loop closure)
+  bool store = true;          // MAP.store/ with every save; MAP.pcd then at the end and on request
 };
 
 Keys replayKeys(ReplayOptions& o);

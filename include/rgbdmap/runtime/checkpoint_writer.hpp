@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "rgbdmap/map_files/map_store.hpp"
 #include "rgbdmap/map_files/trajectory_stream.hpp"
 #include "rgbdmap/mapping/free_space_map.hpp"
 #include "rgbdmap/mapping/ground_frame.hpp"
@@ -45,7 +46,13 @@ class CheckpointWriter {
     // The session written with the map (none: empty path): its size and how long it took.
     std::string session_path;
     std::uint64_t session_bytes = 0;
+    std::uint64_t session_images_written =
+        0;  // images new since the last session (the rest linked)
     double session_seconds = 0.0;
+    // The map store written (none: empty path): what changed, and how long it took.
+    std::string store_path;
+    MapStore::Written store;
+    double store_seconds = 0.0;
   };
   using Callback = std::function<void(const Result&)>;
   // A trajectory written beside the map in the same checkpoint: what it recorded since the last.
@@ -77,9 +84,13 @@ class CheckpointWriter {
     std::string path;
   };
 
-  explicit CheckpointWriter(Callback on_done = nullptr);
+  // `store_path`: the map store (map_store.hpp) every snapshot goes to, what changed since the
+  // last ("" = none).
+  explicit CheckpointWriter(Callback on_done = nullptr, const std::string& store_path = "");
   ~CheckpointWriter();  // finishes a pending write, then stops
 
+  bool hasStore() const { return store_ != nullptr; }
+  // The snapshot goes to the PCD at `path` ("" = none this time) and to the store.
   void submit(std::shared_ptr<const MapCloud> cloud, const std::string& path,
               std::vector<TrajectoryFile> trajectories = {}, MeshFile mesh = {}, GridFile grid = {},
               OctomapFile octomap = {}, SessionFile session = {});
@@ -94,8 +105,11 @@ class CheckpointWriter {
   void writeGrid(const MapCloud& cloud, const GridFile& grid, Result& result);
   void writeOctomap(const MapCloud& cloud, const OctomapFile& octomap, Result& result);
   void writeSessionFile(const SessionFile& session, Result& result);
+  void writeStore(const MapCloud& cloud, Result& result);
 
   Callback on_done_;
+  std::unique_ptr<MapStore> store_;  // used by the writer's thread only
+  SessionImages session_images_;     // the same
   std::mutex mutex_;
   std::condition_variable wake_, idle_;
   std::shared_ptr<const MapCloud> pending_;

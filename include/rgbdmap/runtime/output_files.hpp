@@ -23,6 +23,7 @@ struct PipelineOutputs {
   std::string grid_path;     // occupancy grid (PGM + YAML) written with every map save ("" = none)
   std::string octomap_path;  // binary OctoMap written with every map save ("" = none)
   std::string session_path;  // MAP.session/ written with every map save ("" = none)
+  std::string store_path;    // MAP.store/: every save's changes (map_store.hpp; "" = none)
   bool status_line = true;
   MapPublisher* publisher = nullptr;  // a viewer, fed from the mapping thread (null = none)
 };
@@ -33,13 +34,16 @@ struct PipelineOutputs {
 std::string stem(const std::string& path);
 
 // The files of a run whose map is `map_path`: the map, and beside it MAP_keyframes.txt,
-// MAP_trajectory.txt, MAP.yaml and MAP.session (docs/usage.md), with `mesh_path` ("" = no mesh).
+// MAP_trajectory.txt, MAP.yaml, MAP.session and MAP.store (docs/usage.md), with `mesh_path` ("" =
+// no mesh).
 PipelineOutputs outputsBeside(const std::string& map_path, const std::string& mesh_path = "");
 // The files of a run that localises in a saved map (--localise): only the trajectory of every
 // frame and the effective configuration, named after `map_path` (which is not written).
 PipelineOutputs localisationOutputs(const std::string& map_path);
 // MAP.session, the session folder saved beside map MAP.pcd (session_file.hpp).
 std::string sessionPathOf(const std::string& map_path);
+// MAP.store, the map store beside map MAP.pcd (map_store.hpp).
+std::string storePathOf(const std::string& map_path);
 // MAP.png, the picture of the map the CLI renders after a run.
 std::string picturePathOf(const std::string& map_path);
 // Every temporary file the writers of `outputs` may have on disk while the run goes on.

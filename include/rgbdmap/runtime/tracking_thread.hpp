@@ -24,7 +24,8 @@ class FramesBeforePlacement;  // run_mode.hpp
 class TrackingThread {
  public:
   using ErrorHandler = std::function<void(const std::string&)>;
-  using Checkpoint = std::function<void()>;
+  // `asked`: by SIGUSR1 or a camera outage (then the whole map is wanted), not by the policy.
+  using Checkpoint = std::function<void(bool asked)>;
 
   struct Parts {
     FrameQueue& queue;

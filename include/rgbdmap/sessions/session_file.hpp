@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "rgbdmap/base/frame.hpp"
@@ -53,11 +54,29 @@ struct SessionSummary {
   std::uint64_t bytes = 0;  // all files
 };
 
+// The kept keyframes' images of the sessions one run writes (images.bin), as far as the writer
+// knows them. Images never change once encoded, so each session after the first links the file
+// of the one before and appends only the images new since: the earlier session's keyframes.bin
+// names only bytes before those, so it stays whole until the new folder takes its place. When
+// the file holds more images let go than kept, it is written anew.
+struct SessionImages {
+  struct At {
+    std::uint64_t offset = 0, depth_bytes = 0, colour_bytes = 0;
+  };
+  std::string session;      // the folder whose images.bin this is ("" = none written yet)
+  std::uint64_t inode = 0;  // of that images.bin
+  std::uint64_t bytes = 0;  // of it, as that session's keyframes.bin knows it
+  std::unordered_map<std::uint64_t, At> by_id;  // by KeyframeStore::Entry::id
+  std::uint64_t appended = 0;                   // by the last write: images new to the file
+};
+
 // Writes `session` as folder `path`: the files go into a new folder beside it, which then takes
 // the old one's place in one step (so `path` is always a whole session, the old or the new).
 // Returns false with `error` naming the path and the system error; the old session stays.
+// `images` (null: images.bin written whole): what the last session this run wrote there holds,
+// so that only new images are written; updated when the write succeeds.
 bool writeSession(const Session& session, const std::string& path, std::string& error,
-                  std::uint64_t* bytes = nullptr);
+                  std::uint64_t* bytes = nullptr, SessionImages* images = nullptr);
 
 // Reads a session folder back. Throws InputError naming the file that is missing, from another
 // format version, truncated or corrupt.

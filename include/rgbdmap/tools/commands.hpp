@@ -18,5 +18,6 @@ void addEvaluateCommand(CLI::App& app, Command& selected);   // tools/evaluate.c
 void addViewCommand(CLI::App& app, Command& selected);       // tools/view.cpp
 void addSessionCommand(CLI::App& app, Command& selected);    // tools/session.cpp
 void addMergeCommand(CLI::App& app, Command& selected);      // tools/merge.cpp
+void addExportCommand(CLI::App& app, Command& selected);     // tools/export.cpp
 
 }  // namespace rgbdmap
