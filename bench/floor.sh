@@ -136,7 +136,8 @@ for line in open(log_path, errors='replace'):
             row['loops'].append('whole %s: %s s' % (loop.group(2), loop.group(5)))
         else:
             row['loops'].append('region %s/%s: %s s' % (loop.group(3), loop.group(4), loop.group(5)))
-    checkpoint = re.match(r'checkpoint: \d+ points written to .* in ([\d.]+) s', text)
+    # "checkpoint: N points written to MAP.pcd in S s" or "checkpoint: N points, ... to MAP.store in S s"
+    checkpoint = re.match(r'checkpoint: \d+ points.* to .* in ([\d.]+) s', text)
     if checkpoint:
         row['checkpoint'] = max(row['checkpoint'], float(checkpoint.group(1)))
 

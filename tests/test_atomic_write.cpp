@@ -129,7 +129,7 @@ TEST(AtomicWrite, FileSizeLimitMidRunIsReportedAndTheLastCheckpointLoads) {
       "ulimit -f 4096 && exec " + test::binary() +
           " --source tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100") + " --out " + path +
           " --rate max -q --no-render --set checkpoint.every_keyframes=1"
-          " --set checkpoint.min_seconds=0",
+          " --set checkpoint.min_seconds=0 --set checkpoint.store=false",
       &output);
   EXPECT_EQ(code, 1) << output;
   EXPECT_NE(output.find("checkpoint failed, mapping goes on: " + path + ": cannot write " + path +

@@ -4,12 +4,25 @@
 // longer sequences: test_loop_mapping.cpp.)
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "test_support.hpp"
 
 namespace rgbdmap {
 namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::tuple<float, float, float, std::uint32_t>> sortedPoints(const MapCloud& map) {
+  std::vector<std::tuple<float, float, float, std::uint32_t>> points;
+  for (const auto& p : map.points) points.emplace_back(p.x, p.y, p.z, p.rgba);
+  std::sort(points.begin(), points.end());
+  return points;
+}
 
 // 1.3 circles of the default room at 10 fps, a circle in 10 s: loops from the 100th frame on.
 const std::string kShortOrbit = " --frames 130 --fps 10 --loop-seconds 10";
@@ -34,7 +47,30 @@ TEST(PipelineLoopThread, ClosesLoopsWhileCheckpointingAndFinishesWithTheCorrecti
   EXPECT_EQ(test::jsonNumber(stats, "frames_processed"), 130);
   EXPECT_GT(test::jsonNumber(stats, "checkpoints_written"), 3);
   EXPECT_NE(log.find("loop closed: keyframe"), std::string::npos) << log;
-  EXPECT_FALSE(test::loadMap(dir + "/map.pcd").empty());
+  const MapCloud map = test::loadMap(dir + "/map.pcd");
+  EXPECT_FALSE(map.empty());
+
+  // The checkpoints wrote what changed to the map store, and the final save the rest: it holds
+  // the final map.
+  std::string exported;
+  ASSERT_EQ(test::run(test::binary() + " export " + dir + "/map.store -o " + dir + "/exported.pcd",
+                      &exported),
+            0)
+      << exported;
+  EXPECT_EQ(sortedPoints(test::loadMap(dir + "/exported.pcd")), sortedPoints(map));
+  // Each kept keyframe's images went into the sessions once: each session linked the images of
+  // the one before and added the new ones.
+  double new_images_mb = 0;
+  std::size_t sessions = 0;
+  for (std::size_t at = log.find("MB of new images"); at != std::string::npos;
+       at = log.find("MB of new images", at + 1)) {
+    new_images_mb += std::stod(log.substr(log.rfind('(', at) + 1));
+    ++sessions;
+  }
+  EXPECT_GE(sessions, 3u) << log;
+  const double images_mb =
+      static_cast<double>(fs::file_size(dir + "/map.session/images.bin")) / (1024.0 * 1024.0);
+  EXPECT_NEAR(new_images_mb, images_mb, 0.05 * static_cast<double>(sessions) + 0.01) << log;
 
   std::string output;
   ASSERT_EQ(test::run(test::binary() + " evaluate trajectory --estimate " + dir +

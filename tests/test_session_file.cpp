@@ -135,7 +135,7 @@ TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
   const std::string again = test::freshDir() + "/again.session";
   std::string error;
   ASSERT_TRUE(writeSession(readSession(original), again, error)) << error;
-  for (const char* name : {"graph.bin", "places.bin", "keyframes.bin", "config.yaml"})
+  for (const char* name : {"graph.bin", "places.bin", "keyframes.bin", "images.bin", "config.yaml"})
     EXPECT_EQ(test::readFile(original + "/" + name), test::readFile(again + "/" + name)) << name;
   // (The trajectories' quaternions are normalised when read: the last digit may change.)
   for (const char* name : {"frames.anchored", "keyframes.anchored"}) {
@@ -149,6 +149,49 @@ TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
     beside += entry.path() != fs::path(again);
   EXPECT_EQ(beside, 0u);
   EXPECT_EQ(refusal(again), "");
+}
+
+// A run's sessions (a checkpoint's, then the next): the next links the images the one before
+// wrote and appends only the new keyframes' images; each reads back whole.
+TEST(SessionFile, ARunsNextSessionAddsOnlyTheNewKeyframesImages) {
+  Session whole = readSession(mappedRun() + "/map.session");
+  ASSERT_GT(whole.keyframes.size(), 6u);
+  std::uint64_t id = 100;  // as the run's keyframe store numbers them
+  for (KeyframeStore::Entry& e : whole.keyframes) e.id = id++;
+  Session first = whole;
+  first.keyframes.resize(whole.keyframes.size() / 2);
+  // The second lets two of the first's keyframes go (a budget), as a run may.
+  Session second = whole;
+  second.keyframes.erase(second.keyframes.begin() + 1, second.keyframes.begin() + 3);
+  const auto imageBytes = [](const std::vector<KeyframeStore::Entry>& keyframes, std::size_t from) {
+    std::uint64_t bytes = 0;
+    for (std::size_t i = from; i < keyframes.size(); ++i) bytes += keyframes[i].imageBytes();
+    return bytes;
+  };
+
+  const std::string dir = test::freshDir();
+  const std::string path = dir + "/run.session";
+  SessionImages images;
+  std::string error;
+  ASSERT_TRUE(writeSession(first, path, error, nullptr, &images)) << error;
+  EXPECT_EQ(images.appended, imageBytes(first.keyframes, 0));
+  ASSERT_TRUE(writeSession(second, path, error, nullptr, &images)) << error;
+  EXPECT_EQ(images.appended, imageBytes(whole.keyframes, first.keyframes.size()));
+  EXPECT_EQ(fs::file_size(path + "/images.bin"), imageBytes(whole.keyframes, 0));
+  EXPECT_EQ(fs::hard_link_count(path + "/images.bin"), 1u) << "the earlier folder is gone";
+
+  const Session read = readSession(path);
+  ASSERT_EQ(read.keyframes.size(), second.keyframes.size());
+  for (std::size_t i = 0; i < read.keyframes.size(); ++i) {
+    EXPECT_EQ(read.keyframes[i].timestamp, second.keyframes[i].timestamp);
+    EXPECT_EQ(*read.keyframes[i].depth_png, *second.keyframes[i].depth_png);
+    EXPECT_EQ(*read.keyframes[i].colour_png, *second.keyframes[i].colour_png);
+  }
+  // Another session's log, or none: the images are written whole.
+  const std::string other = dir + "/other.session";
+  ASSERT_TRUE(writeSession(second, other, error, nullptr, &images)) << error;
+  EXPECT_EQ(images.appended, imageBytes(second.keyframes, 0));
+  EXPECT_EQ(fs::file_size(other + "/images.bin"), imageBytes(second.keyframes, 0));
 }
 
 // A checkpoint taken while the loop closer still has the newest keyframes queued: kept keyframes

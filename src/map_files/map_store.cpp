@@ -31,8 +31,11 @@ constexpr std::uint64_t kHeaderBytes = 16;  // a record's cell key and point cou
 // 21 bits per axis, offset by 2^20 cells (the voxel map's block keys alike): ±1000 km at 1 m.
 std::uint64_t cellKey(const pcl::PointXYZRGB& p) {
   const auto axis = [](float v) {
-    const auto cell = static_cast<std::int64_t>(std::floor(v / MapStore::kCellSize));
-    return static_cast<std::uint64_t>(std::clamp<std::int64_t>(cell + (1 << 20), 0, (1 << 21) - 1));
+    constexpr double kHalf = 1 << 20;  // cells each side of 0
+    const double cell = std::floor(static_cast<double>(v) / MapStore::kCellSize);
+    // (A map's points are finite; anything else lands in cell 0 rather than overflow.)
+    const double clamped = std::isfinite(cell) ? std::clamp(cell, -kHalf, kHalf - 1) : 0.0;
+    return static_cast<std::uint64_t>(clamped + kHalf);
   };
   return axis(p.x) << 42 | axis(p.y) << 21 | axis(p.z);
 }

@@ -14,6 +14,7 @@
 #include <functional>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 
 #include "rgbdmap/base/binary_record.hpp"
 #include "rgbdmap/base/error.hpp"
@@ -166,11 +167,17 @@ bool writeImages(const Session& s, const std::string& path, const std::string& f
                  const SessionImages* log, std::vector<SessionImages::At>& at, SessionImages& next,
                  std::string& error) {
   std::uint64_t kept = 0;
-  for (const KeyframeStore::Entry& e : s.keyframes) kept += imageBytesOf(e);
+  // Known by their store's ids: keyframes that share one (read, not a run's) are written whole.
+  std::unordered_set<std::uint64_t> ids;
+  bool unique = true;
+  for (const KeyframeStore::Entry& e : s.keyframes) {
+    kept += imageBytesOf(e);
+    unique = ids.insert(e.id).second && unique;
+  }
   bool linked = false;
   const std::string last = path + "/" + kImagesFile;
   struct stat st {};
-  if (log != nullptr && log->session == path && ::stat(last.c_str(), &st) == 0 &&
+  if (log != nullptr && unique && log->session == path && ::stat(last.c_str(), &st) == 0 &&
       st.st_ino == log->inode && static_cast<std::uint64_t>(st.st_size) >= log->bytes &&
       log->bytes <= 2 * kept + (64u << 20))
     linked = ::link(last.c_str(), file.c_str()) == 0;
