@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <thread>
 #include <vector>
 
@@ -96,18 +97,23 @@ TEST(FrameQueue, DropOldestNeverBlocksTheCameraEvenWhenTheMapperStalls) {
 TEST(FrameQueue, DropOldestUnderConcurrentSlowConsumer) {
   FrameQueue queue(2, QueuePolicy::kDropOldest, 8, 6);
   constexpr std::uint64_t kFrames = 600;
+  std::atomic<std::uint64_t> pushed{0};
   std::thread producer([&] {
     for (std::uint64_t i = 0; i < kFrames; ++i) {
       Frame* f = queue.acquire();
       ASSERT_NE(f, nullptr);
       f->index = i;
       queue.push(f);
+      pushed.fetch_add(1);
       std::this_thread::sleep_for(std::chrono::microseconds(100));  // a fast camera
     }
     queue.close();
   });
   std::uint64_t received = 0, last = 0;
   bool finished = false, first = true;
+  // The mapper starts late (a first keyframe's fusion): drops happen whatever the machine's
+  // speed, which the sleeps below alone do not ensure on a loaded one.
+  while (pushed.load() < 10) std::this_thread::yield();
   while (!finished) {
     if (Frame* f = queue.pop(std::chrono::milliseconds(50), finished)) {
       if (!first) {

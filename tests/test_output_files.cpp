@@ -37,12 +37,15 @@ TEST(OutputFiles, TemporaryFilesOfEveryWriter) {
   const std::string pid = std::to_string(::getpid());
   std::vector<std::string> files = temporaryFiles(outputsBeside("out/m.pcd", "out/m.ply"));
   std::sort(files.begin(), files.end());
-  const std::vector<std::string> expected = {
-      "out/m.pcd.tmp-" + pid,          "out/m.ply.tmp-" + pid,
-      "out/m_keyframes.txt.anchored",  "out/m_keyframes.txt.tmp-" + pid,
-      "out/m_trajectory.txt.anchored", "out/m_trajectory.txt.tmp-" + pid};
+  const std::vector<std::string> expected = {"out/m.pcd.tmp-" + pid,
+                                             "out/m.ply.tmp-" + pid,
+                                             "out/m.store/index.bin.tmp-" + pid,
+                                             "out/m_keyframes.txt.anchored",
+                                             "out/m_keyframes.txt.tmp-" + pid,
+                                             "out/m_trajectory.txt.anchored",
+                                             "out/m_trajectory.txt.tmp-" + pid};
   EXPECT_EQ(files, expected);
-  EXPECT_EQ(temporaryFiles(outputsBeside("m.pcd")).size(), 5u) << "no mesh, no mesh file";
+  EXPECT_EQ(temporaryFiles(outputsBeside("m.pcd")).size(), 6u) << "no mesh, no mesh file";
 }
 
 TEST(PoseSource, AutoIsTheSourcesGroundTruthElseOdometry) {
