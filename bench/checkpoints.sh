@@ -4,7 +4,7 @@
 # checkpoint.store=false (each checkpoint rewrites MAP.pcd whole). Prints, for each, the
 # checkpoints, the bytes the map's checkpoints wrote, the seconds the writer spent on
 # checkpoints (all of it: map, trajectories, session), the session's share and the new images
-# its sessions wrote (each kept keyframe's images once: images.bin is appended to), and the
+# and places its sessions wrote (each once: images.bin and places.data are appended to), and the
 # run's wall time and peak RSS. A benchmark: times depend on the machine; compare the rows.
 #   bash bench/checkpoints.sh --tum FOLDER [--build DIR] [--every N] [--keep DIR]
 #                             [-- rgbdmap options...]
@@ -57,14 +57,14 @@ done
 import json, re, sys
 work = sys.argv[1]
 print('| checkpoints write | checkpoints | map bytes written (MB) | writer seconds (all) |'
-      ' of which sessions | new images (MB) | wall (s) | peak RSS (MB) |')
+      ' of which sessions | new images and places (MB) | wall (s) | peak RSS (MB) |')
 print('| --- | --- | --- | --- | --- | --- | --- | --- |')
 for mode, label in (('store', 'changes to MAP.store'), ('pcd', 'MAP.pcd whole')):
     log = open(f'{work}/{mode}/log.txt').read()
     stats = json.load(open(f'{work}/{mode}/stats.json'))
     seconds = [float(s) for s in re.findall(r'checkpoint: \d+ points.* in ([\d.]+) s', log)]
     session = [float(s) for s in re.findall(r'session: [\d.]+ MB written to \S+ in ([\d.]+) s', log)]
-    images = sum(float(s) for s in re.findall(r'\(([\d.]+) MB of new images\)', log))
+    images = sum(float(s) for s in re.findall(r'\(([\d.]+) MB of new images and places\)', log))
     if mode == 'store':
         written = stats['store_bytes_written'] / 2**20
     else:  # 16 bytes a point and the header, each PCD

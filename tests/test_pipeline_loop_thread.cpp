@@ -58,19 +58,20 @@ TEST(PipelineLoopThread, ClosesLoopsWhileCheckpointingAndFinishesWithTheCorrecti
             0)
       << exported;
   EXPECT_EQ(sortedPoints(test::loadMap(dir + "/exported.pcd")), sortedPoints(map));
-  // Each kept keyframe's images went into the sessions once: each session linked the images of
-  // the one before and added the new ones.
-  double new_images_mb = 0;
+  // Each kept keyframe's images and each place went into the sessions once: each session linked
+  // the files of the one before and added what was new.
+  double new_mb = 0;
   std::size_t sessions = 0;
-  for (std::size_t at = log.find("MB of new images"); at != std::string::npos;
-       at = log.find("MB of new images", at + 1)) {
-    new_images_mb += std::stod(log.substr(log.rfind('(', at) + 1));
+  for (std::size_t at = log.find("MB of new images and places"); at != std::string::npos;
+       at = log.find("MB of new images and places", at + 1)) {
+    new_mb += std::stod(log.substr(log.rfind('(', at) + 1));
     ++sessions;
   }
   EXPECT_GE(sessions, 3u) << log;
-  const double images_mb =
-      static_cast<double>(fs::file_size(dir + "/map.session/images.bin")) / (1024.0 * 1024.0);
-  EXPECT_NEAR(new_images_mb, images_mb, 0.05 * static_cast<double>(sessions) + 0.01) << log;
+  const double files_mb = static_cast<double>(fs::file_size(dir + "/map.session/images.bin") +
+                                              fs::file_size(dir + "/map.session/places.data")) /
+                          (1024.0 * 1024.0);
+  EXPECT_NEAR(new_mb, files_mb, 0.05 * static_cast<double>(sessions) + 0.01) << log;
 
   std::string output;
   ASSERT_EQ(test::run(test::binary() + " evaluate trajectory --estimate " + dir +

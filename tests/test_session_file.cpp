@@ -135,7 +135,8 @@ TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
   const std::string again = test::freshDir() + "/again.session";
   std::string error;
   ASSERT_TRUE(writeSession(readSession(original), again, error)) << error;
-  for (const char* name : {"graph.bin", "places.bin", "keyframes.bin", "images.bin", "config.yaml"})
+  for (const char* name :
+       {"graph.bin", "places.bin", "keyframes.bin", "images.bin", "places.data", "config.yaml"})
     EXPECT_EQ(test::readFile(original + "/" + name), test::readFile(again + "/" + name)) << name;
   // (The trajectories' quaternions are normalised when read: the last digit may change.)
   for (const char* name : {"frames.anchored", "keyframes.anchored"}) {
@@ -151,8 +152,9 @@ TEST(SessionFile, ReadAndWrittenAgainGivesTheSameFiles) {
   EXPECT_EQ(refusal(again), "");
 }
 
-// A run's sessions (a checkpoint's, then the next): the next links the images the one before
-// wrote and appends only the new keyframes' images; each reads back whole.
+// A run's sessions (a checkpoint's, then the next): the next links the images and places the one
+// before wrote and appends only the new keyframes' images (its places are the same); each reads
+// back whole.
 TEST(SessionFile, ARunsNextSessionAddsOnlyTheNewKeyframesImages) {
   Session whole = readSession(mappedRun() + "/map.session");
   ASSERT_GT(whole.keyframes.size(), 6u);
@@ -171,17 +173,29 @@ TEST(SessionFile, ARunsNextSessionAddsOnlyTheNewKeyframesImages) {
 
   const std::string dir = test::freshDir();
   const std::string path = dir + "/run.session";
-  SessionImages images;
+  SessionAppends appends;
   std::string error;
-  ASSERT_TRUE(writeSession(first, path, error, nullptr, &images)) << error;
-  EXPECT_EQ(images.appended, imageBytes(first.keyframes, 0));
-  ASSERT_TRUE(writeSession(second, path, error, nullptr, &images)) << error;
-  EXPECT_EQ(images.appended, imageBytes(whole.keyframes, first.keyframes.size()));
+  ASSERT_TRUE(writeSession(first, path, error, nullptr, &appends)) << error;
+  const std::uint64_t places = fs::file_size(path + "/places.data");
+  EXPECT_GT(places, 0u);
+  EXPECT_EQ(appends.appended, imageBytes(first.keyframes, 0) + places);
+  ASSERT_TRUE(writeSession(second, path, error, nullptr, &appends)) << error;
+  EXPECT_EQ(appends.appended, imageBytes(whole.keyframes, first.keyframes.size()));
   EXPECT_EQ(fs::file_size(path + "/images.bin"), imageBytes(whole.keyframes, 0));
-  EXPECT_EQ(fs::hard_link_count(path + "/images.bin"), 1u) << "the earlier folder is gone";
+  EXPECT_EQ(fs::file_size(path + "/places.data"), places);
+  for (const char* name : {"/images.bin", "/places.data"})
+    EXPECT_EQ(fs::hard_link_count(path + name), 1u) << name << ": the earlier folder is gone";
 
   const Session read = readSession(path);
   ASSERT_EQ(read.keyframes.size(), second.keyframes.size());
+  ASSERT_EQ(read.graph.places.size(), second.graph.places.size());
+  for (std::size_t i = 0; i < read.graph.places.size(); ++i) {
+    ASSERT_EQ(!read.graph.places[i], !second.graph.places[i]) << i;
+    if (read.graph.places[i]) {
+      EXPECT_EQ(read.graph.places[i]->view.points.size(),
+                second.graph.places[i]->view.points.size());
+    }
+  }
   for (std::size_t i = 0; i < read.keyframes.size(); ++i) {
     EXPECT_EQ(read.keyframes[i].timestamp, second.keyframes[i].timestamp);
     EXPECT_EQ(*read.keyframes[i].depth_png, *second.keyframes[i].depth_png);
@@ -189,8 +203,8 @@ TEST(SessionFile, ARunsNextSessionAddsOnlyTheNewKeyframesImages) {
   }
   // Another session's log, or none: the images are written whole.
   const std::string other = dir + "/other.session";
-  ASSERT_TRUE(writeSession(second, other, error, nullptr, &images)) << error;
-  EXPECT_EQ(images.appended, imageBytes(second.keyframes, 0));
+  ASSERT_TRUE(writeSession(second, other, error, nullptr, &appends)) << error;
+  EXPECT_EQ(appends.appended, imageBytes(second.keyframes, 0) + places);
   EXPECT_EQ(fs::file_size(other + "/images.bin"), imageBytes(second.keyframes, 0));
 }
 
@@ -268,8 +282,24 @@ TEST(SessionFile, TruncatedCorruptOrOtherVersionIsRefusedNamingTheFile) {
     // A file of another kind in a session's place.
     const std::string s = copySession(dir, "swapped.session");
     fs::copy_file(s + "/places.bin", s + "/graph.bin", fs::copy_options::overwrite_existing);
-    EXPECT_NE(refusal(s).find(s + "/graph.bin: holds 'PLCS', expected 'GRPH'"), std::string::npos)
+    EXPECT_NE(refusal(s).find(s + "/graph.bin: holds 'PLIX', expected 'GRPH'"), std::string::npos)
         << refusal(s);
+  }
+  {
+    // The files only ever appended to: cut short, or a place changed.
+    const std::string s = copySession(dir, "appended.session");
+    fs::resize_file(s + "/images.bin", fs::file_size(s + "/images.bin") / 2);
+    EXPECT_NE(refusal(s).find(s + "/images.bin: truncated"), std::string::npos) << refusal(s);
+    const std::string t = copySession(dir, "places.session");
+    fs::resize_file(t + "/places.data", fs::file_size(t + "/places.data") - 1);
+    EXPECT_NE(refusal(t).find(t + "/places.data: truncated"), std::string::npos) << refusal(t);
+    const std::string u = copySession(dir, "place.session");
+    std::fstream file(u + "/places.data", std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(100);
+    file.put('\x5a');
+    file.close();
+    EXPECT_NE(refusal(u).find(u + "/places.data (the place at byte 0): corrupt"), std::string::npos)
+        << refusal(u);
   }
   // The command line: one message naming the file, exit 2.
   const std::string s = copySession(dir, "cli.session");

@@ -103,9 +103,9 @@ void CheckpointWriter::writeSessionFile(const SessionFile& session, Result& resu
   const auto start = std::chrono::steady_clock::now();
   std::string error;
   if (writeSession(*session.session, session.path, error, &result.session_bytes,
-                   &session_images_)) {
+                   &session_appends_)) {
     result.session_path = session.path;
-    result.session_images_written = session_images_.appended;
+    result.session_appended = session_appends_.appended;
   } else {
     addFailure(result, "session " + error);
   }

@@ -168,10 +168,10 @@ CheckpointWriter::Callback reportWrites(RunStats& stats, const std::string& mesh
                    r.mesh_seconds);
     }
     if (!r.session_path.empty())
-      spdlog::info("session: {:.1f} MB written to {} in {:.2f} s ({:.1f} MB of new images)",
-                   static_cast<double>(r.session_bytes) / (1024.0 * 1024.0), r.session_path,
-                   r.session_seconds,
-                   static_cast<double>(r.session_images_written) / (1024.0 * 1024.0));
+      spdlog::info(
+          "session: {:.1f} MB written to {} in {:.2f} s ({:.1f} MB of new images and places)",
+          static_cast<double>(r.session_bytes) / (1024.0 * 1024.0), r.session_path,
+          r.session_seconds, static_cast<double>(r.session_appended) / (1024.0 * 1024.0));
     if (!r.store_path.empty()) {
       stats.store_write_latency.record(r.store_seconds);
       stats.store_bytes_written.fetch_add(r.store.bytes);

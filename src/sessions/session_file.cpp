@@ -34,11 +34,14 @@ constexpr const char* kGraphFile = "graph.bin";
 constexpr const char* kPlacesFile = "places.bin";
 constexpr const char* kKeyframesFile = "keyframes.bin";
 constexpr const char* kImagesFile = "images.bin";
+constexpr const char* kPlacesDataFile = "places.data";
 constexpr const char* kStreamsFile = "streams.bin";
 constexpr const char* kFramesFile = "frames.anchored";
 constexpr const char* kFusedFile = "keyframes.anchored";
 constexpr char kGraphKind[5] = "GRPH";
-constexpr char kPlacesKind[5] = "PLCS";
+constexpr char kPlacesKind[5] = "PLCS";         // places inside (sessions before places.data)
+constexpr char kPlaceIndexKind[5] = "PLIX";     // places in places.data
+constexpr char kPlaceKind[5] = "PLCE";          // one place, in places.data
 constexpr char kKeyframesKind[5] = "KFRM";      // images inside (sessions before images.bin)
 constexpr char kKeyframeIndexKind[5] = "KFIX";  // images in images.bin
 constexpr char kStreamsKind[5] = "STRM";
@@ -94,35 +97,147 @@ void readGraph(BinaryReader in, Session& s) {
   if (!in.atEnd()) in.fail("corrupt (bytes after the edges)");
 }
 
-// After writeGraph(): at most one place a keyframe written (a live loop closer may have added
-// keyframes and places since).
-void writePlaces(const Session& s, RecordWriter& out, SessionSummary& summary) {
+// A place as a record of its own (kind PLCE) in places.data: its view and its dense reference,
+// expanded as the aligner takes it (packing again gives the same points).
+std::string placeRecord(const PlaceRecognition::Place& place, AlignmentReference& reference) {
+  std::string bytes;
+  RecordWriter out(bytes, kPlaceKind, Session::kFormatVersion);
+  putView(out, place.view);
+  place.reference.expand(reference);
+  out.put<std::int32_t>(reference.valid_pixels);
+  out.put<std::uint64_t>(reference.levels.size());
+  for (const AlignmentReference::Level& level : reference.levels) {
+    out.put(level.camera);
+    out.put<std::uint64_t>(level.points.size());
+    out.putBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
+  }
+  out.finish();
+  return bytes;
+}
+
+// The place of one record (what placeRecord() wrote, or one place of an older places.bin).
+std::shared_ptr<const PlaceRecognition::Place> getPlace(BinaryReader& in,
+                                                        AlignmentReference& reference) {
+  auto place = std::make_shared<PlaceRecognition::Place>();
+  place->view = getView(in);
+  reference.valid_pixels = in.get<std::int32_t>();
+  reference.levels.resize(in.count(sizeof(LevelCamera)));
+  for (AlignmentReference::Level& level : reference.levels) {
+    level.camera = in.get<LevelCamera>();
+    level.points.resize(in.count(sizeof(Eigen::Vector4f)));
+    in.getBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
+  }
+  place->reference = PackedReference::pack(reference);
+  return place;
+}
+
+// A file of a new session folder that a run's sessions only add to: linked to the same file of
+// the session last written at `path` when `known` still describes it (and `may_link`), and then
+// written from the end that session knows; else written from empty.
+class AppendedFile {
+ public:
+  AppendedFile(const std::string& path, const char* name, const std::string& file,
+               const SessionAppends* log, const SessionAppends::File* known, bool may_link)
+      : file_(file) {
+    const std::string last = path + "/" + name;
+    struct stat st {};
+    linked_ = log != nullptr && may_link && log->session == path &&
+              ::stat(last.c_str(), &st) == 0 && st.st_ino == known->inode &&
+              static_cast<std::uint64_t>(st.st_size) >= known->bytes &&
+              ::link(last.c_str(), file.c_str()) == 0;
+    fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (linked_ ? 0 : O_TRUNC), 0644);
+    end_ = linked_ ? known->bytes : 0;
+    // What a failed write of an earlier session left past the end its index knows goes.
+    ok_ = fd_ >= 0 && ::ftruncate(fd_, static_cast<off_t>(end_)) == 0 &&
+          ::lseek(fd_, static_cast<off_t>(end_), SEEK_SET) >= 0;
+  }
+  ~AppendedFile() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  AppendedFile(const AppendedFile&) = delete;
+  AppendedFile& operator=(const AppendedFile&) = delete;
+
+  bool linked() const { return linked_; }
+  std::uint64_t end() const { return end_; }
+  bool append(const void* data, std::size_t size) {
+    ok_ = ok_ && writeAll(fd_, static_cast<const char*>(data), size);
+    end_ += size;
+    return ok_;
+  }
+  // Synced: `now` describes it. False with `error` naming the file and the system error.
+  bool finish(SessionAppends::File& now, std::string& error) {
+    struct stat st {};
+    ok_ = ok_ && ::fdatasync(fd_) == 0 && ::fstat(fd_, &st) == 0;
+    if (!ok_) {
+      error = file_ + ": cannot write: " + std::strerror(errno);
+      return false;
+    }
+    now = {static_cast<std::uint64_t>(st.st_ino), end_};
+    return true;
+  }
+
+ private:
+  std::string file_;
+  bool linked_ = false;
+  int fd_ = -1;
+  std::uint64_t end_ = 0;
+  bool ok_ = false;
+};
+
+// After writeGraph(): at most one place a keyframe (a live loop closer may have added keyframes
+// and places since) into places.data, after those of the last session written when `log` knows
+// them. `at` gets where each graph keyframe's place is (bytes 0: none).
+bool writePlaceData(const Session& s, std::size_t keyframes, const std::string& path,
+                    const std::string& file, const SessionAppends* log,
+                    std::vector<SessionAppends::PlaceAt>& at, SessionAppends& next,
+                    std::string& error) {
   std::vector<std::shared_ptr<const PlaceRecognition::Place>> live;
   if (s.live_graph) live = s.live_graph->places();
   const auto& places = s.live_graph ? live : s.graph.places;
-  const std::size_t count = std::min(places.size(), summary.keyframes);
-  out.put<std::uint64_t>(count);
-  AlignmentReference reference;
+  const std::size_t count = std::min(places.size(), keyframes);
+  AppendedFile out(path, kPlacesDataFile, file, log, log ? &log->places : nullptr, true);
+  AlignmentReference reference;  // its buffers serve every place
+  at.assign(count, {});
   for (std::size_t id = 0; id < count; ++id) {
-    const auto& place = places[id];
-    out.put<std::uint8_t>(place ? 1 : 0);
-    if (!place) continue;
-    ++summary.places;
-    putView(out, place->view);
-    // Expanded as the aligner takes it (the file keeps the format it had before places were
-    // packed in memory; packing again gives the same points).
-    place->reference.expand(reference);
-    out.put<std::int32_t>(reference.valid_pixels);
-    out.put<std::uint64_t>(reference.levels.size());
-    for (const AlignmentReference::Level& level : reference.levels) {
-      out.put(level.camera);
-      out.put<std::uint64_t>(level.points.size());
-      out.putBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
+    const PlaceRecognition::Place* place = places[id].get();
+    if (place == nullptr) continue;
+    const auto known = out.linked() ? log->places_by_id.find(id) : next.places_by_id.end();
+    if (out.linked() && known != log->places_by_id.end() && known->second.second == place) {
+      at[id] = known->second.first;
+    } else {
+      const std::string bytes = placeRecord(*place, reference);
+      at[id] = {out.end(), bytes.size()};
+      if (!out.append(bytes.data(), bytes.size())) break;
+      next.appended += bytes.size();
     }
+    next.places_by_id[id] = {at[id], place};
+  }
+  return out.finish(next.places, error);
+}
+
+void writePlaceIndex(const std::vector<SessionAppends::PlaceAt>& at, RecordWriter& out,
+                     SessionSummary& summary) {
+  out.put<std::uint64_t>(at.size());
+  for (const SessionAppends::PlaceAt& place : at) {
+    out.put<std::uint8_t>(place.bytes > 0 ? 1 : 0);
+    if (place.bytes == 0) continue;
+    ++summary.places;
+    out.put(place);
   }
 }
 
-void readPlaces(BinaryReader in, Session& s) {
+// A session's places: places.bin an index into places.data, or (before places.data) the places
+// themselves.
+void readPlaces(BinaryReader in, Session& s, const std::string& data_path) {
+  const bool indexed = !data_path.empty();
+  std::ifstream data;
+  std::uint64_t data_bytes = 0;
+  if (indexed) {
+    data.open(data_path, std::ios::binary);
+    if (!data) throw InputError(data_path + ": cannot open (" + std::strerror(errno) + ")");
+    std::error_code ec;
+    data_bytes = fs::file_size(data_path, ec);
+  }
   // At most one a keyframe: a place is added to the loop closer after its graph's node, so a
   // session written while it runs may have fewer (the newest keyframes then have none).
   const std::size_t count = in.count(1);
@@ -131,19 +246,26 @@ void readPlaces(BinaryReader in, Session& s) {
             std::to_string(s.graph.keyframes.size()) + " keyframes)");
   s.graph.places.resize(count);
   AlignmentReference reference;  // as read, before packing (its buffers serve every place)
+  std::string bytes;
   for (auto& slot : s.graph.places) {
     if (in.get<std::uint8_t>() == 0) continue;
-    auto place = std::make_shared<PlaceRecognition::Place>();
-    place->view = getView(in);
-    reference.valid_pixels = in.get<std::int32_t>();
-    reference.levels.resize(in.count(sizeof(LevelCamera)));
-    for (AlignmentReference::Level& level : reference.levels) {
-      level.camera = in.get<LevelCamera>();
-      level.points.resize(in.count(sizeof(Eigen::Vector4f)));
-      in.getBytes(level.points.data(), level.points.size() * sizeof(Eigen::Vector4f));
+    if (!indexed) {
+      slot = getPlace(in, reference);
+      continue;
     }
-    place->reference = PackedReference::pack(reference);
-    slot = std::move(place);
+    const auto at = in.get<SessionAppends::PlaceAt>();
+    bytes.resize(at.bytes);
+    if (at.offset > data_bytes || at.bytes > data_bytes - at.offset ||
+        !data.seekg(static_cast<std::streamoff>(at.offset)) ||
+        !data.read(bytes.data(), static_cast<std::streamsize>(bytes.size())))
+      throw InputError(data_path + ": truncated (" + std::to_string(data_bytes) +
+                       " bytes; places.bin names a place at byte " + std::to_string(at.offset) +
+                       ")");
+    BinaryReader place =
+        readRecord(bytes, data_path + " (the place at byte " + std::to_string(at.offset) + ")",
+                   kPlaceKind, Session::kFormatVersion);
+    slot = getPlace(place, reference);
+    if (!place.atEnd()) place.fail("corrupt (bytes after the place)");
   }
   if (!in.atEnd()) in.fail("corrupt (bytes after the places)");
   s.graph.places.resize(s.graph.keyframes.size());
@@ -164,8 +286,8 @@ std::uint64_t imageBytesOf(const KeyframeStore::Entry& e) {
 // at `path` when `log` knows them (the file linked, not copied), else all of them. `at` gets
 // where each kept keyframe's are; `next` what the log becomes once the session is in place.
 bool writeImages(const Session& s, const std::string& path, const std::string& file,
-                 const SessionImages* log, std::vector<SessionImages::At>& at, SessionImages& next,
-                 std::string& error) {
+                 const SessionAppends* log, std::vector<SessionAppends::ImagesAt>& at,
+                 SessionAppends& next, std::string& error) {
   std::uint64_t kept = 0;
   // Known by their store's ids: keyframes that share one (read, not a run's) are written whole.
   std::unordered_set<std::uint64_t> ids;
@@ -174,54 +296,34 @@ bool writeImages(const Session& s, const std::string& path, const std::string& f
     kept += imageBytesOf(e);
     unique = ids.insert(e.id).second && unique;
   }
-  bool linked = false;
-  const std::string last = path + "/" + kImagesFile;
-  struct stat st {};
-  if (log != nullptr && unique && log->session == path && ::stat(last.c_str(), &st) == 0 &&
-      st.st_ino == log->inode && static_cast<std::uint64_t>(st.st_size) >= log->bytes &&
-      log->bytes <= 2 * kept + (64u << 20))
-    linked = ::link(last.c_str(), file.c_str()) == 0;
-  const int fd =
-      ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (linked ? 0 : O_TRUNC), 0644);
-  std::uint64_t end = linked ? log->bytes : 0;
-  // What a failed write of an earlier session left past the end its index knows goes.
-  bool ok = fd >= 0 && ::ftruncate(fd, static_cast<off_t>(end)) == 0 &&
-            ::lseek(fd, static_cast<off_t>(end), SEEK_SET) >= 0;
-  next.by_id.clear();
-  next.appended = 0;
+  // Written anew once the images let go outweigh those kept (and 64 MB).
+  const bool may_link = unique && log != nullptr && log->images.bytes <= 2 * kept + (64u << 20);
+  AppendedFile out(path, kImagesFile, file, log, log ? &log->images : nullptr, may_link);
   at.clear();
   try {
     for (const KeyframeStore::Entry& e : s.keyframes) {
-      if (!ok) break;
-      const auto known = linked ? log->by_id.find(e.id) : next.by_id.end();
-      if (linked && known != log->by_id.end()) {
+      const auto known = out.linked() ? log->images_by_id.find(e.id) : next.images_by_id.end();
+      if (out.linked() && known != log->images_by_id.end()) {
         at.push_back(known->second);
       } else {
         const auto depth = e.depthImage();  // read back from disk for the time of writing it
         const auto colour = e.colourImage();
-        at.push_back({end, depth->size(), colour->size()});
-        ok = writeAll(fd, reinterpret_cast<const char*>(depth->data()), depth->size()) &&
-             writeAll(fd, reinterpret_cast<const char*>(colour->data()), colour->size());
-        end += depth->size() + colour->size();
+        at.push_back({out.end(), depth->size(), colour->size()});
+        if (!out.append(depth->data(), depth->size()) ||
+            !out.append(colour->data(), colour->size()))
+          break;
         next.appended += depth->size() + colour->size();
       }
-      next.by_id[e.id] = at.back();
+      next.images_by_id[e.id] = at.back();
     }
   } catch (const std::runtime_error& e) {
     error = file + ": " + e.what();
-    if (fd >= 0) ::close(fd);
     return false;
   }
-  ok = ok && ::fdatasync(fd) == 0 && ::fstat(fd, &st) == 0;
-  if (!ok) error = file + ": cannot write: " + std::strerror(errno);
-  if (fd >= 0) ::close(fd);
-  next.session = path;
-  next.inode = st.st_ino;
-  next.bytes = end;
-  return ok;
+  return out.finish(next.images, error);
 }
 
-void writeKeyframeIndex(const Session& s, const std::vector<SessionImages::At>& at,
+void writeKeyframeIndex(const Session& s, const std::vector<SessionAppends::ImagesAt>& at,
                         RecordWriter& out, SessionSummary& summary) {
   out.put<double>(KeyframeStore::kInverseDepthUnits);
   out.put<std::int32_t>(KeyframeStore::kColourBitsDropped);
@@ -255,14 +357,14 @@ void readKeyframeIndex(BinaryReader in, Session& s, const std::string& images_pa
                        ")");
     return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
   };
-  s.keyframes.resize(in.count(8 + 8 + 8 + 2 * 12 * 8 + sizeof(SessionImages::At)));
+  s.keyframes.resize(in.count(8 + 8 + 8 + 2 * 12 * 8 + sizeof(SessionAppends::ImagesAt)));
   for (KeyframeStore::Entry& e : s.keyframes) {
     e.timestamp = in.get<double>();
     e.index = in.get<std::uint64_t>();
     e.anchor = in.get<std::int64_t>();
     e.pose = getPose(in);
     e.fused_at = getPose(in);
-    const auto at = in.get<SessionImages::At>();
+    const auto at = in.get<SessionAppends::ImagesAt>();
     e.depth_png = blob(at.offset, at.depth_bytes);
     e.colour_png = blob(at.offset + at.depth_bytes, at.colour_bytes);
     if (e.anchor < -1)
@@ -428,7 +530,7 @@ SessionSummary summarise(const Session& s, const std::string& path) {
 }
 
 bool writeSession(const Session& session, const std::string& path, std::string& error,
-                  std::uint64_t* bytes, SessionImages* images) {
+                  std::uint64_t* bytes, SessionAppends* appends) {
   const std::string fresh = temporaryFileOf(path);
   std::error_code ec;
   fs::remove_all(fresh, ec);
@@ -461,14 +563,23 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
         if (!unreadable.empty()) error = in(name) + ": " + unreadable;
         return written;
       };
-  std::vector<SessionImages::At> at;
-  SessionImages next;
-  const auto keyframeIndex = [&at](const Session& s, RecordWriter& out, SessionSummary& summary) {
-    writeKeyframeIndex(s, at, out, summary);
+  // The places and images after those the last session of the run holds (appends).
+  SessionAppends next;
+  std::vector<SessionAppends::PlaceAt> places;
+  std::vector<SessionAppends::ImagesAt> images;
+  const auto placeIndex = [&places](const Session&, RecordWriter& out, SessionSummary& summary) {
+    writePlaceIndex(places, out, summary);
+  };
+  const auto keyframeIndex = [&images](const Session& s, RecordWriter& out,
+                                       SessionSummary& summary) {
+    writeKeyframeIndex(s, images, out, summary);
   };
   const bool written =
-      record(kGraphFile, kGraphKind, writeGraph) && record(kPlacesFile, kPlacesKind, writePlaces) &&
-      writeImages(session, path, in(kImagesFile), images, at, next, error) &&
+      record(kGraphFile, kGraphKind, writeGraph) &&
+      writePlaceData(session, summary.keyframes, path, in(kPlacesDataFile), appends, places, next,
+                     error) &&
+      record(kPlacesFile, kPlaceIndexKind, placeIndex) &&
+      writeImages(session, path, in(kImagesFile), appends, images, next, error) &&
       record(kKeyframesFile, kKeyframeIndexKind, keyframeIndex) &&
       (session.streams.empty() || record(kStreamsFile, kStreamsKind, writeStreams)) &&
       writeTrajectory(in(kFramesFile), session.frames, session.frames_spool, error) &&
@@ -493,7 +604,10 @@ bool writeSession(const Session& session, const std::string& path, std::string& 
   if (exists) fs::remove_all(fresh, ec);
   syncFolder(fs::absolute(path).parent_path().string());
   if (bytes) *bytes = folderBytes(path);
-  if (images) *images = std::move(next);
+  if (appends) {
+    next.session = path;
+    *appends = std::move(next);
+  }
   return true;
 }
 
@@ -514,7 +628,12 @@ Session readSession(const std::string& path) {
     session.configuration = text.str();
   }
   readGraph(openRecord(in(kGraphFile), kGraphKind, Session::kFormatVersion), session);
-  readPlaces(openRecord(in(kPlacesFile), kPlacesKind, Session::kFormatVersion), session);
+  // Since places.data, places.bin is an index into it; before, it held the places.
+  if (fs::exists(in(kPlacesDataFile), ec))
+    readPlaces(openRecord(in(kPlacesFile), kPlaceIndexKind, Session::kFormatVersion), session,
+               in(kPlacesDataFile));
+  else
+    readPlaces(openRecord(in(kPlacesFile), kPlacesKind, Session::kFormatVersion), session, "");
   // Since images.bin, keyframes.bin is an index into it; before, it held the images.
   if (fs::exists(in(kImagesFile), ec))
     readKeyframeIndex(openRecord(in(kKeyframesFile), kKeyframeIndexKind, Session::kFormatVersion),

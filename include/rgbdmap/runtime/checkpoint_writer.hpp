@@ -46,8 +46,8 @@ class CheckpointWriter {
     // The session written with the map (none: empty path): its size and how long it took.
     std::string session_path;
     std::uint64_t session_bytes = 0;
-    std::uint64_t session_images_written =
-        0;  // images new since the last session (the rest linked)
+    // Images and places new since the last session (the rest linked, not written).
+    std::uint64_t session_appended = 0;
     double session_seconds = 0.0;
     // The map store written (none: empty path): what changed, and how long it took.
     std::string store_path;
@@ -109,7 +109,7 @@ class CheckpointWriter {
 
   Callback on_done_;
   std::unique_ptr<MapStore> store_;  // used by the writer's thread only
-  SessionImages session_images_;     // the same
+  SessionAppends session_appends_;   // the same
   std::mutex mutex_;
   std::condition_variable wake_, idle_;
   std::shared_ptr<const MapCloud> pending_;

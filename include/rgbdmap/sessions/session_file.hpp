@@ -54,29 +54,38 @@ struct SessionSummary {
   std::uint64_t bytes = 0;  // all files
 };
 
-// The kept keyframes' images of the sessions one run writes (images.bin), as far as the writer
-// knows them. Images never change once encoded, so each session after the first links the file
-// of the one before and appends only the images new since: the earlier session's keyframes.bin
-// names only bytes before those, so it stays whole until the new folder takes its place. When
-// the file holds more images let go than kept, it is written anew.
-struct SessionImages {
-  struct At {
+// What the sessions one run writes only ever add to, as far as the writer knows it: the kept
+// keyframes' images (images.bin) and the places (places.data), which never change once made. So
+// each session after the first links those files of the one before and appends only what is new
+// since: the earlier session's keyframes.bin and places.bin name only bytes before that, so it
+// stays whole until the new folder takes its place. When images.bin holds more images let go
+// than kept, it is written anew.
+struct SessionAppends {
+  struct File {
+    std::uint64_t inode = 0;  // of the file in the session last written
+    std::uint64_t bytes = 0;  // of it, as that session's index knows it
+  };
+  struct ImagesAt {
     std::uint64_t offset = 0, depth_bytes = 0, colour_bytes = 0;
   };
-  std::string session;      // the folder whose images.bin this is ("" = none written yet)
-  std::uint64_t inode = 0;  // of that images.bin
-  std::uint64_t bytes = 0;  // of it, as that session's keyframes.bin knows it
-  std::unordered_map<std::uint64_t, At> by_id;  // by KeyframeStore::Entry::id
-  std::uint64_t appended = 0;                   // by the last write: images new to the file
+  struct PlaceAt {
+    std::uint64_t offset = 0, bytes = 0;  // bytes 0: no place
+  };
+  std::string session;  // the folder last written ("" = none yet)
+  File images, places;
+  std::unordered_map<std::uint64_t, ImagesAt> images_by_id;  // by KeyframeStore::Entry::id
+  // By graph keyframe id, with the place they were written from (a place replaced is new).
+  std::unordered_map<std::uint64_t, std::pair<PlaceAt, const void*>> places_by_id;
+  std::uint64_t appended = 0;  // by the last write: images and places new to the files
 };
 
 // Writes `session` as folder `path`: the files go into a new folder beside it, which then takes
 // the old one's place in one step (so `path` is always a whole session, the old or the new).
 // Returns false with `error` naming the path and the system error; the old session stays.
-// `images` (null: images.bin written whole): what the last session this run wrote there holds,
-// so that only new images are written; updated when the write succeeds.
+// `appends` (null: every file written whole): what the last session this run wrote there holds,
+// so that only new images and places are written; updated when the write succeeds.
 bool writeSession(const Session& session, const std::string& path, std::string& error,
-                  std::uint64_t* bytes = nullptr, SessionImages* images = nullptr);
+                  std::uint64_t* bytes = nullptr, SessionAppends* appends = nullptr);
 
 // Reads a session folder back. Throws InputError naming the file that is missing, from another
 // format version, truncated or corrupt.
