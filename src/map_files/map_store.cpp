@@ -238,7 +238,7 @@ MapCloud readMapStore(const std::string& path) {
   if (!fs::is_directory(path, ec))
     throw InputError(path +
                      ": no map store there (a run writes it beside its map as MAP.store, "
-                     "docs/map-store.md)");
+                     "docs/usage.md#the-map-store)");
   BinaryReader index = openRecord(path + "/" + kIndexFile, kIndexKind, kVersion);
   const std::uint64_t generation = index.get<std::uint64_t>();
   if (index.get<double>() != MapStore::kCellSize)

@@ -340,10 +340,29 @@ void writeKeyframeIndex(const Session& s, const std::vector<SessionAppends::Imag
   }
 }
 
-void readKeyframeIndex(BinaryReader in, Session& s, const std::string& images_path) {
+// The image encoding every keyframes.bin starts with: refused unless it is this rgbdmap's.
+void checkImageEncoding(BinaryReader& in) {
   if (in.get<double>() != KeyframeStore::kInverseDepthUnits ||
       in.get<std::int32_t>() != KeyframeStore::kColourBitsDropped)
     in.fail("images stored with another depth or colour encoding than this rgbdmap's");
+}
+
+// What keyframes.bin holds of a kept keyframe before its images (or where they are).
+constexpr std::size_t kKeyframeHeadBytes = 8 + 8 + 8 + 2 * 12 * 8;
+void getKeyframeHead(BinaryReader& in, KeyframeStore::Entry& e) {
+  e.timestamp = in.get<double>();
+  e.index = in.get<std::uint64_t>();
+  e.anchor = in.get<std::int64_t>();
+  e.pose = getPose(in);
+  e.fused_at = getPose(in);
+  // An anchor may lie beyond the graph: a checkpoint taken while the loop closer still had the
+  // newest keyframes queued. Such a keyframe shares the newest correction, as in the run.
+  if (e.anchor < -1)
+    in.fail("corrupt (a kept keyframe anchored to " + std::to_string(e.anchor) + ")");
+}
+
+void readKeyframeIndex(BinaryReader in, Session& s, const std::string& images_path) {
+  checkImageEncoding(in);
   std::ifstream images(images_path, std::ios::binary);
   if (!images) throw InputError(images_path + ": cannot open (" + std::strerror(errno) + ")");
   std::error_code ec;
@@ -357,40 +376,24 @@ void readKeyframeIndex(BinaryReader in, Session& s, const std::string& images_pa
                        ")");
     return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
   };
-  s.keyframes.resize(in.count(8 + 8 + 8 + 2 * 12 * 8 + sizeof(SessionAppends::ImagesAt)));
+  s.keyframes.resize(in.count(kKeyframeHeadBytes + sizeof(SessionAppends::ImagesAt)));
   for (KeyframeStore::Entry& e : s.keyframes) {
-    e.timestamp = in.get<double>();
-    e.index = in.get<std::uint64_t>();
-    e.anchor = in.get<std::int64_t>();
-    e.pose = getPose(in);
-    e.fused_at = getPose(in);
+    getKeyframeHead(in, e);
     const auto at = in.get<SessionAppends::ImagesAt>();
     e.depth_png = blob(at.offset, at.depth_bytes);
     e.colour_png = blob(at.offset + at.depth_bytes, at.colour_bytes);
-    if (e.anchor < -1)
-      in.fail("corrupt (a kept keyframe anchored to " + std::to_string(e.anchor) + ")");
   }
   if (!in.atEnd()) in.fail("corrupt (bytes after the keyframes)");
 }
 
 // A session written before images.bin: each kept keyframe's images inside keyframes.bin.
 void readKeyframes(BinaryReader in, Session& s) {
-  if (in.get<double>() != KeyframeStore::kInverseDepthUnits ||
-      in.get<std::int32_t>() != KeyframeStore::kColourBitsDropped)
-    in.fail("images stored with another depth or colour encoding than this rgbdmap's");
-  s.keyframes.resize(in.count(8 + 8 + 8 + 2 * 12 * 8 + 16));
+  checkImageEncoding(in);
+  s.keyframes.resize(in.count(kKeyframeHeadBytes + 16));
   for (KeyframeStore::Entry& e : s.keyframes) {
-    e.timestamp = in.get<double>();
-    e.index = in.get<std::uint64_t>();
-    e.anchor = in.get<std::int64_t>();
-    e.pose = getPose(in);
-    e.fused_at = getPose(in);
+    getKeyframeHead(in, e);
     e.depth_png = getBlob(in);
     e.colour_png = getBlob(in);
-    // An anchor may lie beyond the graph: a checkpoint taken while the loop closer still had the
-    // newest keyframes queued. Such a keyframe shares the newest correction, as in the run.
-    if (e.anchor < -1)
-      in.fail("corrupt (a kept keyframe anchored to " + std::to_string(e.anchor) + ")");
   }
   if (!in.atEnd()) in.fail("corrupt (bytes after the keyframes)");
 }

@@ -8,9 +8,9 @@
 
 namespace rgbdmap {
 
-// The map kept on disk as it grows (MAP.store/ beside MAP.pcd, docs/map-store.md), its points by
-// cells of 1 m, so that a checkpoint writes only the cells whose points changed since the one
-// before: a new keyframe changes the few cells it sees, a loop those it moved. A building's map
+// The map kept on disk as it grows (MAP.store/ beside MAP.pcd, docs/usage.md "The map store"), its
+// points by cells of 1 m, so that a checkpoint writes only the cells whose points changed since the
+// one before: a new keyframe changes the few cells it sees, a loop those it moved. A building's map
 // is millions of points; rewriting its whole PCD at every checkpoint grows with the building,
 // this with what changed. `rgbdmap export` writes the PCD a store holds.
 //
