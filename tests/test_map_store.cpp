@@ -106,6 +106,41 @@ TEST(MapStore, AWriteAddsOnlyTheCellsThatChangedAndReadsBackAsTheLastMap) {
   EXPECT_EQ(sorted(readMapStore(store)), sorted(map));
 }
 
+// What ROS's ~map_changes sends: the same cells as the store writes, with their coordinates.
+TEST(MapChanges, NamesTheCellsThatChangedOrEmptiedAndNothingForTheSamePoints) {
+  const MapCloud map = room(3.0f, 2.0f);
+  MapChanges changes;
+  const MapChanges::Change first = changes.next(MapCells::of(map));
+  EXPECT_EQ(first.changed.size(), 9u);  // everything at first: 6 of floor, 3 of the wall's top
+  EXPECT_TRUE(first.removed.empty());
+
+  MapCloud shuffled = map;
+  std::shuffle(shuffled.points.begin(), shuffled.points.end(), std::mt19937(5));
+  const MapChanges::Change same = changes.next(MapCells::of(shuffled));
+  EXPECT_TRUE(same.changed.empty() && same.removed.empty());
+
+  // The cell [1, 2) x [0, 1) x [0, 1) loses its points, [2, 3) x [1, 2) x [-1, 0) has one more.
+  MapCloud next;
+  for (const auto& p : map.points)
+    if (!(p.x >= 1.0f && p.x < 2.0f && p.y < 1.0f && p.z < 1.0f)) next.push_back(p);
+  pcl::PointXYZRGB below;
+  below.x = 2.5f;
+  below.y = 1.5f;
+  below.z = -0.01f;
+  next.push_back(below);
+  const MapCells cells = MapCells::of(next);
+  const MapChanges::Change change = changes.next(cells);
+  ASSERT_EQ(change.changed.size(), 1u);
+  EXPECT_EQ(MapCells::coordinatesOf(change.changed[0]), Eigen::Vector3i(2, 1, -1));
+  EXPECT_EQ(cells.cells.at(change.changed[0]).points, std::vector<std::uint32_t>{
+                                                          static_cast<std::uint32_t>(next.size() - 1)});
+  ASSERT_EQ(change.removed.size(), 1u);
+  EXPECT_EQ(MapCells::coordinatesOf(change.removed[0]), Eigen::Vector3i(1, 0, 0));
+
+  changes.forget();
+  EXPECT_EQ(changes.next(cells).changed.size(), cells.cells.size());
+}
+
 TEST(MapStore, ItsPointsAreWrittenAnewWhenOldRecordsOutweighTheMap) {
   const std::string store = test::freshDir() + "/map.store";
   MapStore writer(store);

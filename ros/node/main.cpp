@@ -108,6 +108,7 @@ RosPublisher::Options publisherOptions(const NodeSettings& settings, const Topic
   if (!publish.camera_frame.empty() && publish.camera_frame.front() == '/')
     publish.camera_frame.erase(0, 1);  // tf2 frame ids carry no leading slash
   publish.map_interval = settings.map_interval;
+  publish.map_max_points = settings.map_max_points;
   publish.grid_interval = settings.grid_interval;
   publish.up = config.up;
   publish.grid = config.grid;
@@ -233,7 +234,8 @@ int runNode(RunControl& control, RunSignals& signals) {
                         settings.octomap);
   // What the node publishes (localising: the pose alone) and the services that write the map.
   const std::string published = mode->maps()
-                                    ? fmt::format("{}, {} and {}", pnh.resolveName("map"),
+                                    ? fmt::format("{}, {}, {} and {}", pnh.resolveName("map"),
+                                                  pnh.resolveName("map_changes"),
                                                   pnh.resolveName("grid"), pnh.resolveName("pose"))
                                     : pnh.resolveName("pose");
   spdlog::info("{}: publishing {}, TF {} -> {}{}", mode->name(), published, publish.map_frame,

@@ -1,5 +1,6 @@
 #include "rgbdmap/ros/node_params.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <set>
 
@@ -66,6 +67,11 @@ NodeSettings readNodeSettings(const ros::NodeHandle& nh) {
   s.map_interval = numberParam(nh, "map_interval", "2");
   if (!(s.map_interval >= 0))
     throw InputError("parameter " + nh.resolveName("map_interval") + ": must be >= 0");
+  const double max_points = numberParam(nh, "map_max_points", "2000000");
+  if (!(max_points >= 0) || max_points != std::floor(max_points) || max_points > 4e9)
+    throw InputError("parameter " + nh.resolveName("map_max_points") +
+                     ": must be a whole number of points >= 0 (0: the whole map)");
+  s.map_max_points = static_cast<std::size_t>(max_points);
   s.grid_interval = numberParam(nh, "grid_interval", "5");
   s.session_interval = numberParam(nh, "session_interval", "0.5");
   s.session_rate = numberParam(nh, "session_rate", "750000");
@@ -93,7 +99,7 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   const std::set<std::string> settings = {
       "config",        "out",     "stats",   "map_frame", "camera_frame", "map_interval",
       "grid_interval", "grid",    "octomap", "localise",  "continue",     "session_interval",
-      "session_rate",  "lossless"};
+      "session_rate",  "lossless", "map_max_points"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);
   if (ros::param::getParamNames(names)) {
@@ -106,7 +112,8 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
       if (!keys.count(key))
         throw InputError("parameter " + name + ": unknown (config keys: `rgbdmap --list-keys`, " +
                          "'.' written '/'; node settings: ~config, ~out, ~stats, ~map_frame, " +
-                         "~camera_frame, ~map_interval, ~grid_interval, ~grid, ~octomap, "
+                         "~camera_frame, ~map_interval, ~map_max_points, ~grid_interval, ~grid, "
+                         "~octomap, "
                          "~localise, ~continue, ~session_interval, " +
                          "~session_rate, ~lossless)");
     }

@@ -33,6 +33,11 @@ RosPublisher::RosPublisher(ros::NodeHandle& private_nh, Options options)
     : options_(std::move(options)) {
   // Latched: a consumer that subscribes later (another machine, a screen) still gets the map.
   map_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>("map", 1, true);
+  // Not latched: the last changes alone would be part of a map. A subscriber is greeted with the
+  // whole map instead, then gets what changes.
+  changes_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>(
+      "map_changes", 4,
+      [this](const ros::SingleSubscriberPublisher& s) { greetChangesSubscriber(s); });
   pose_pub_ = private_nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   if (options_.grid_interval >= 0.0)
     grid_pub_ = private_nh.advertise<nav_msgs::OccupancyGrid>("grid", 1, true);
@@ -106,6 +111,7 @@ void RosPublisher::run() {
       const UpEvidence up = up_;
       lock.unlock();
       sendMap(*map, stamp);
+      sendChanges(map, stamp);
       if (options_.grid_interval >= 0.0) {
         if (now() >= next_grid_at_) {
           sendGrid(*map, up, stamp);
@@ -189,8 +195,38 @@ void RosPublisher::sendGrid(const MapCloud& map, const UpEvidence& up, double st
 }
 
 void RosPublisher::sendMap(const MapCloud& map, double stamp) {
-  map_pub_.publish(toCloudMessage(map, options_.map_frame, stamp));
+  map_pub_.publish(toCloudMessage(map, options_.map_frame, stamp, options_.map_max_points));
   maps_published_.fetch_add(1);
+}
+
+void RosPublisher::sendChanges(const std::shared_ptr<const MapCloud>& map, double stamp) {
+  std::lock_guard<std::mutex> lock(changes_mutex_);
+  changes_map_ = map;
+  changes_stamp_ = stamp;
+  if (changes_pub_.getNumSubscribers() == 0) {
+    changes_known_ = false;  // nobody to tell: a subscriber is greeted with the whole map
+    return;
+  }
+  if (!changes_known_) changes_.forget();  // those who subscribed since were greeted with less
+  const MapCells cells = MapCells::of(*map);
+  const MapChanges::Change change = changes_.next(cells);
+  changes_known_ = true;
+  if (change.changed.empty() && change.removed.empty()) return;
+  changes_pub_.publish(toCellChangesMessage(*map, cells, change, options_.map_frame, stamp));
+}
+
+void RosPublisher::greetChangesSubscriber(const ros::SingleSubscriberPublisher& subscriber) {
+  std::lock_guard<std::mutex> lock(changes_mutex_);
+  if (!changes_map_) return;  // no map yet: the first changes will be every cell
+  const MapCells cells = MapCells::of(*changes_map_);
+  MapChanges whole;
+  const MapChanges::Change everything = whole.next(cells);
+  subscriber.publish(
+      toCellChangesMessage(*changes_map_, cells, everything, options_.map_frame, changes_stamp_));
+  if (!changes_known_) {
+    changes_ = std::move(whole);
+    changes_known_ = true;
+  }
 }
 
 }  // namespace rgbdmap

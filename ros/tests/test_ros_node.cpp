@@ -11,14 +11,17 @@
 #include <std_srvs/Trigger.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <mutex>
 #include <thread>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/trajectory.hpp"
+#include "rgbdmap/ros/cloud_message.hpp"
 #include "rgbdmap/runtime/run_signals.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
 #include "rgbdmap/sessions/session_stream.hpp"
@@ -138,20 +141,76 @@ class RosNode : public RosTest {
   }
 };
 
+// A point's bytes (x, y, z, rgba), to compare maps exactly: a packed colour as a float can be NaN.
+using PointBits = std::array<std::uint32_t, 4>;
+PointBits bitsOf(const pcl::PointXYZRGB& p) {
+  PointBits b;
+  std::memcpy(&b[0], &p.x, 4);
+  std::memcpy(&b[1], &p.y, 4);
+  std::memcpy(&b[2], &p.z, 4);
+  std::memcpy(&b[3], &p.rgba, 4);
+  return b;
+}
+
+// A consumer of ~map_changes: the map it builds from them, cell by cell.
+struct MapFromChanges {
+  std::mutex mutex;
+  CellMap cells;
+  std::uint64_t messages = 0;
+  std::string error;
+  ros::Subscriber sub;
+
+  void subscribe(ros::NodeHandle& nh) {
+    sub = nh.subscribe<sensor_msgs::PointCloud2>(
+        "/rgbdmap/map_changes", 100, [this](const sensor_msgs::PointCloud2::ConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (!applyCellChanges(*m, cells, error)) ADD_FAILURE() << error;
+          ++messages;
+        });
+  }
+  // Its points, in an order that does not depend on the cells'.
+  std::vector<PointBits> points() {
+    std::lock_guard<std::mutex> lock(mutex);
+    std::vector<PointBits> out;
+    for (const auto& [cell, points] : cells)
+      for (const pcl::PointXYZRGB& p : points) out.push_back(bitsOf(p));
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+};
+
+std::vector<PointBits> sortedPoints(const MapCloud& map) {
+  std::vector<PointBits> out;
+  for (const pcl::PointXYZRGB& p : map.points) out.push_back(bitsOf(p));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 // The node maps a bag (every frame: the player waits for it) and serves what it maps: the map
-// while mapping, the grid, poses, and its services.
+// while mapping (~map thinned to its ~map_max_points, ~map_changes whole), the grid, poses, and
+// its services.
 TEST_F(RosNode, MapsABagPlayedAtThePaceItKeeps) {
   const std::string bag = sharedBag(kRpy);
   Received got;
   got.subscribe(*nh_, "");
+  MapFromChanges changes;
+  changes.subscribe(*nh_);
   const std::string node_log = dir_ + "/node.log";
-  Process node(nodeArgs(dir_, "", Pace::kNode), node_log);
+  const std::uint64_t kMaxPoints = 50000;
+  std::vector<std::string> args = nodeArgs(dir_, "", Pace::kNode);
+  args.push_back("_map_max_points:=" + std::to_string(kMaxPoints));
+  Process node(args, node_log);
   auto player = play(bag, "", dir_ + "/play.log", Pace::kNode);
   ASSERT_EQ(player->wait(120), 0) << readFile(dir_ + "/play.log");
-  // The map arrives while mapping, not only at the end.
-  ASSERT_TRUE(waitUntil([&] { return got.largest_map.load() >= kMapPoints; }, 30))
+  // The map arrives while mapping, not only at the end: ~map thinned, ~map_changes building the
+  // whole of it.
+  ASSERT_TRUE(waitUntil([&] { return changes.points().size() >= kMapPoints; }, 30))
+      << changes.points().size() << " points from " << changes.messages << " changes\n"
+      << readFile(node_log);
+  ASSERT_TRUE(waitUntil([&] { return got.largest_map.load() >= std::min(kMapPoints, kMaxPoints / 2); }, 30))
       << got.largest_map.load() << " points\n"
       << readFile(node_log);
+  EXPECT_LE(got.largest_map.load(), kMaxPoints);
   EXPECT_TRUE(got.map_intact.load());
 
   // ~save_map answers once the map is written.
@@ -178,6 +237,12 @@ TEST_F(RosNode, MapsABagPlayedAtThePaceItKeeps) {
   EXPECT_NE(readFile(node_log).find("map: "), std::string::npos);
   EXPECT_GE(loadMap(dir_ + "/map.pcd").size(), kMapPoints);
   EXPECT_GT(got.maps.load(), maps_before) << "the final map was not published";
+  // What ~map_changes built is the final map, point for point.
+  const std::vector<PointBits> final_map = sortedPoints(loadMap(dir_ + "/map.pcd"));
+  EXPECT_TRUE(waitUntil([&] { return changes.points() == final_map; }, 30))
+      << changes.points().size() << " points from " << changes.messages << " changes, "
+      << final_map.size() << " in map.pcd";
+  EXPECT_GT(changes.messages, 1u);
   // The grid, latched: the last one drawn from the final map (a sanitizer build may map too
   // little of the room for one).
   EXPECT_TRUE(got.grid_intact.load());

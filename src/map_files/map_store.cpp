@@ -28,24 +28,6 @@ constexpr std::uint32_t kVersion = 1;
 constexpr std::uint64_t kPointBytes = 16;   // x y z rgba, as a PCD's
 constexpr std::uint64_t kHeaderBytes = 16;  // a record's cell key and point count
 
-// 21 bits per axis, offset by 2^20 cells (the voxel map's block keys alike): ±1000 km at 1 m.
-std::uint64_t cellKey(const pcl::PointXYZRGB& p) {
-  const auto axis = [](float v) {
-    constexpr double kHalf = 1 << 20;  // cells each side of 0
-    const double cell = std::floor(static_cast<double>(v) / MapStore::kCellSize);
-    // (A map's points are finite; anything else lands in cell 0 rather than overflow.)
-    const double clamped = std::isfinite(cell) ? std::clamp(cell, -kHalf, kHalf - 1) : 0.0;
-    return static_cast<std::uint64_t>(clamped + kHalf);
-  };
-  return axis(p.x) << 42 | axis(p.y) << 21 | axis(p.z);
-}
-
-std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 void packPoint(const pcl::PointXYZRGB& p, char* out) {
   std::memcpy(out, &p.x, 4);
   std::memcpy(out + 4, &p.y, 4);
@@ -53,43 +35,16 @@ void packPoint(const pcl::PointXYZRGB& p, char* out) {
   std::memcpy(out + 12, &p.rgba, 4);
 }
 
-// The map's points by cell: their indices, and a hash of the points that ignores their order
-// (the voxel map extracts blocks in an order that changes as blocks go to disk and come back).
-struct CellPoints {
-  std::uint64_t hash = 0;
-  std::vector<std::uint32_t> points;
-};
-
-std::unordered_map<std::uint64_t, CellPoints> byCell(const MapCloud& map) {
-  std::unordered_map<std::uint64_t, CellPoints> cells;
-  CellPoints* last = nullptr;  // neighbouring points mostly share a cell
-  std::uint64_t last_key = 0;
-  char packed[kPointBytes];
-  for (std::uint32_t i = 0; i < map.size(); ++i) {
-    const std::uint64_t key = cellKey(map.points[i]);
-    if (last == nullptr || key != last_key) {
-      last = &cells[key];
-      last_key = key;
-    }
-    packPoint(map.points[i], packed);
-    std::uint64_t words[2];
-    std::memcpy(words, packed, sizeof words);
-    last->hash += mix(words[0] ^ mix(words[1]));
-    last->points.push_back(i);
-  }
-  return cells;
-}
-
 std::uint64_t recordBytes(std::uint64_t points) { return kHeaderBytes + points * kPointBytes; }
 
 // Appends the cells' records to `fd` from `offset` on, noting where each starts.
 bool appendRecords(int fd, const MapCloud& map,
-                   const std::unordered_map<std::uint64_t, CellPoints>& cells,
+                   const std::unordered_map<std::uint64_t, MapCells::Cell>& cells,
                    const std::vector<std::uint64_t>& keys, std::uint64_t offset,
                    std::unordered_map<std::uint64_t, std::uint64_t>& offsets) {
   std::vector<char> buffer;
   for (const std::uint64_t key : keys) {
-    const CellPoints& cell = cells.at(key);
+    const MapCells::Cell& cell = cells.at(key);
     const std::uint64_t count = cell.points.size();
     buffer.resize(recordBytes(count));
     std::memcpy(buffer.data(), &key, 8);
@@ -116,7 +71,8 @@ std::string MapStore::pointsFile(std::uint64_t generation) const {
 
 bool MapStore::write(const MapCloud& map, Written& written, std::string& error) {
   written = {};
-  const std::unordered_map<std::uint64_t, CellPoints> cells = byCell(map);
+  const MapCells grouped = MapCells::of(map);
+  const std::unordered_map<std::uint64_t, MapCells::Cell>& cells = grouped.cells;
   written.points = map.size();
   written.cells = cells.size();
   std::vector<std::uint64_t> changed;

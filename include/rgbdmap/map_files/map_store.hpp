@@ -4,6 +4,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "rgbdmap/mapping/map_cells.hpp"
 #include "rgbdmap/mapping/map_cloud.hpp"
 
 namespace rgbdmap {
@@ -23,7 +24,7 @@ namespace rgbdmap {
 // goes.
 class MapStore {
  public:
-  static constexpr double kCellSize = 1.0;  // m
+  static constexpr double kCellSize = MapCells::kCellSize;
 
   // What one write did.
   struct Written {

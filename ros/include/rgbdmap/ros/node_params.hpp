@@ -16,6 +16,8 @@ struct NodeSettings {
   std::string map_frame;     // ~map_frame
   std::string camera_frame;  // ~camera_frame ("" = the colour images' frame_id)
   double map_interval = 2;   // ~map_interval: seconds between published maps at least
+  // ~map_max_points: /rgbdmap/map thinned to at most this many points (0: whole)
+  std::size_t map_max_points = 2'000'000;
   double grid_interval = 5;  // ~grid_interval: seconds between published grids (< 0: no ~grid)
   // ~session_interval: seconds between looks at the graph for ~session/graph and
   // ~session/places (<= 0: not streamed); ~session_rate: bytes a second they stay under.

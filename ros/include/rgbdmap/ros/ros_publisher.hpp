@@ -11,6 +11,7 @@
 #include <string>
 #include <thread>
 
+#include "rgbdmap/mapping/map_cells.hpp"
 #include "rgbdmap/mapping/occupancy_grid.hpp"
 #include "rgbdmap/ros/session_publisher.hpp"
 #include "rgbdmap/runtime/map_publisher.hpp"
@@ -18,7 +19,9 @@
 namespace rgbdmap {
 
 // The run as ROS sees it, through the same publisher interface as the viewer: ~map
-// (sensor_msgs/PointCloud2, latched, at most every `map_interval` s), ~grid
+// (sensor_msgs/PointCloud2, latched, at most every `map_interval` s, thinned to at most
+// `map_max_points`), ~map_changes (the cells of the map that changed since the map before, at
+// full resolution; a new subscriber first gets every cell of the last map), ~grid
 // (nav_msgs/OccupancyGrid drawn from that map, latched, at most every `grid_interval` s; its
 // origin is the pose of the grid's corner in map_frame, z up), ~pose (geometry_msgs/PoseStamped)
 // and TF map_frame -> camera frame. The pipeline's calls only copy
@@ -29,6 +32,8 @@ class RosPublisher : public MapPublisher {
     std::string map_frame = "map";
     std::string camera_frame = "camera_rgb_optical_frame";
     double map_interval = 2.0;   // seconds between maps at most
+    // ~map's points at most (0: the whole map); ~map_changes always has every point of a cell.
+    std::size_t map_max_points = 2'000'000;
     double grid_interval = 5.0;  // seconds between grids at most; negative: no grid
     UpOptions up;
     GridOptions grid;
@@ -55,10 +60,19 @@ class RosPublisher : public MapPublisher {
   void run();
   void sendPose(double stamp, const Eigen::Isometry3d& pose);
   void sendMap(const MapCloud& map, double stamp);
+  void sendChanges(const std::shared_ptr<const MapCloud>& map, double stamp);
+  void greetChangesSubscriber(const ros::SingleSubscriberPublisher& subscriber);
   void sendGrid(const MapCloud& map, const UpEvidence& up, double stamp);
 
   Options options_;
-  ros::Publisher map_pub_, pose_pub_, grid_pub_;
+  ros::Publisher map_pub_, changes_pub_, pose_pub_, grid_pub_;
+  // ~map_changes: the last map sent (what a new subscriber gets whole) and its cells' hashes,
+  // shared by the publishing thread and ROS's connection callbacks.
+  std::mutex changes_mutex_;
+  std::shared_ptr<const MapCloud> changes_map_;
+  double changes_stamp_ = 0.0;
+  MapChanges changes_;
+  bool changes_known_ = false;  // changes_ holds changes_map_'s cells
   tf2_ros::TransformBroadcaster tf_;
 
   mutable std::mutex mutex_;
