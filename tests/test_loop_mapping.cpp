@@ -160,12 +160,13 @@ TEST(Walk, ClosingLoopsRoundARoomKeepsEveryReportedLoopTrue) {
   const std::string dir = test::freshDir();
   const MappingRun on = mapSequence(sequence, dir + "/on", true);
   const MappingRun off = mapSequence(sequence, dir + "/off", false);
-  // Measured: on ATE 0.23 cm, precision 0.9997, 33 loops; off ATE 0.70 cm, precision 0.9969.
+  // Measured: on ATE 0.18 cm, precision 0.9995, 27 loops; off ATE 0.23 cm, precision 0.9994
+  // (depth weighed by its noise in tracking; photometric alone, off drifted to 0.70 cm).
   EXPECT_GE(test::jsonNumber(on.stats, "loops_accepted"), 5);
   EXPECT_EQ(
       test::jsonNumber(on.stats, "loops_rejected") + test::jsonNumber(on.stats, "frames_lost"), 0);
-  EXPECT_LT(on.ate_m, 0.005);
-  EXPECT_LT(on.ate_m, off.ate_m / 2);
+  EXPECT_LT(on.ate_m, 0.003);
+  EXPECT_LT(on.ate_m, off.ate_m);
   EXPECT_GE(on.precision, 0.995);
   EXPECT_GE(on.precision, off.precision);
   EXPECT_GE(checkReportedLoops(on.log, sequence), 1) << on.log;

@@ -80,9 +80,9 @@ PixelSample bilinear(const PyramidLevel& level, float u, float v, bool& depth_ok
 
 // The residuals of the reference's `points` (x, y, z, intensity) moved by (R, t) into `level`,
 // each with its Jacobian rows; every 4th point's absolute residuals go to abs_i and abs_z (for
-// the robust scales).
+// the robust scales). With `quadratic_noise`, depth residuals and their rows are divided by z^2.
 void residualsAt(const AlignmentReference::Points& points, const PyramidLevel& level,
-                 const Eigen::Matrix3f& R, const Eigen::Vector3f& t,
+                 const Eigen::Matrix3f& R, const Eigen::Vector3f& t, bool quadratic_noise,
                  std::vector<Residual>& residuals, std::vector<float>& abs_i,
                  std::vector<float>& abs_z) {
   const LevelCamera& c = level.camera;
@@ -105,6 +105,13 @@ void residualsAt(const AlignmentReference::Points& points, const PyramidLevel& l
     if (depth_ok) {
       r.jz = jacobianRow(p, s[4] * dux, s[5] * dvy, s[4] * duz + s[5] * dvz - 1.0f);
       r.rz = s[3] - p.z();
+      if (quadratic_noise) {
+        // In units of the pixel's own noise: a structured-light sensor's grows with z^2, so a
+        // far pixel's metre of residual says less than a near one's.
+        const float n = 1.0f / (p.z() * p.z());
+        r.jz *= n;
+        r.rz *= n;
+      }
       if ((n & 3) == 0) abs_z.push_back(std::abs(r.rz));
     } else {
       r.rz = std::numeric_limits<float>::quiet_NaN();
@@ -190,6 +197,7 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   const int coarsest = std::min(options_.coarsest_level, current.levels() - 1);
   const float k = static_cast<float>(options_.huber_k);
   const float depth_weight = static_cast<float>(options_.depth_weight);
+  const bool quadratic_noise = options_.depth_noise == "quadratic";
   std::vector<Residual> residuals;
   std::vector<float> abs_i, abs_z;
   float sigma_i = 10.0f, sigma_z = 0.02f;
@@ -207,7 +215,7 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       residuals.clear();
       abs_i.clear();
       abs_z.clear();
-      residualsAt(points, level, R, t, residuals, abs_i, abs_z);
+      residualsAt(points, level, R, t, quadratic_noise, residuals, abs_i, abs_z);
       landed = residuals.size();
       if (landed < 12) break;
       sigma_i = robustSigma(abs_i, sigma_i);

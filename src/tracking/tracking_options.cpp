@@ -16,6 +16,9 @@ Keys trackingKeys(TrackingOptions& o) {
               "dense: Gauss-Newton steps on the finest level"),
       number("tracking.depth_weight", &o.depth_weight, 0, 100,
              "dense: weight of depth residuals against intensity residuals (0 = photometric only)"),
+      choice("tracking.depth_noise", &o.depth_noise, {"quadratic", "constant"},
+             "dense: a depth residual's noise grows with depth squared (quadratic: structured "
+             "light, stereo) or is the same everywhere (constant)"),
       number("tracking.huber_k", &o.huber_k, 0.1, 100,
              "dense: Huber threshold in robust standard deviations"),
       number("tracking.min_gradient", &o.min_gradient, 0, 255,

@@ -22,7 +22,11 @@ struct TrackingOptions {
   bool undistort = true;
   int max_iterations = 12;    // Gauss-Newton steps per level (coarse levels)
   int finest_iterations = 6;  // on the finest level, where a step costs the most
-  double depth_weight = 0.0;  // weight of a (normalised) depth residual vs an intensity one
+  double depth_weight = 0.1;  // weight of a (normalised) depth residual vs an intensity one
+  // How a depth residual's noise varies over the image: "quadratic", with depth squared (a
+  // structured-light or stereo sensor's), or "constant" (one robust scale for every pixel).
+  // Measured in docs/benchmarks.md (Tracking): quadratic at 0.1 against photometric only.
+  std::string depth_noise = "quadratic";
   double huber_k = 1.345;     // Huber threshold, in robust standard deviations
   double min_gradient = 3.0;  // finest level: pixels with a weaker intensity gradient only
                               // take part every second row and column (grey levels/px)
