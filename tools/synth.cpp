@@ -37,6 +37,7 @@ bool parseFloorSize(const std::string& text, double& length, double& width) {
 // What `synth` was asked.
 struct SynthOptions {
   std::string out, scene, room, building, write_scene;
+  std::string depth_camera;  // "X,Y,Z,RX,RY,RZ": m and degrees
   double height = 2.8;
   bool no_noise = false;
   SyntheticSequenceOptions sequence;
@@ -76,6 +77,19 @@ int synth(const SynthOptions& o, bool noise_seed_given, bool frames_given,
   if (!o.building.empty() && (!o.scene.empty() || !o.room.empty()))
     throw InputError("synth: --building makes its own scene; leave out --scene and --room");
   if (options.path == "tour" && !frames_given) options.frames = 0;  // one whole tour
+  if (!o.depth_camera.empty()) {
+    double v[6];
+    char end = 0;
+    if (std::sscanf(o.depth_camera.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3],
+                    &v[4], &v[5], &end) != 6 ||
+        Eigen::Vector3d(v[0], v[1], v[2]).norm() > 0.2 ||
+        Eigen::Vector3d(v[3], v[4], v[5]).norm() > 10.0)
+      throw InputError("synth: --depth-camera '" + o.depth_camera +
+                       "': expected X,Y,Z,RX,RY,RZ (m within 0.2, rotation vector in degrees "
+                       "within 10)");
+    options.depth_camera_position = {v[0], v[1], v[2]};
+    options.depth_camera_rotation = Eigen::Vector3d(v[3], v[4], v[5]) * M_PI / 180.0;
+  }
   const SyntheticScene scene = sceneFor(o, surface_voxel_given, options);
   if (!o.write_scene.empty()) {
     try {
@@ -105,6 +119,15 @@ int synth(const SynthOptions& o, bool noise_seed_given, bool frames_given,
       "rgbdmap evaluate map map.pcd --scene %s\n",
       summary.frames, o.out.c_str(), summary.seconds, 100.0 * summary.valid_depth_share,
       summary.surface_points, o.out.c_str(), o.out.c_str());
+  if (!o.depth_camera.empty()) {
+    const Eigen::Vector3d& t = options.depth_camera_position;
+    const Eigen::Vector3d& r = options.depth_camera_rotation;
+    std::printf(
+        "depth is not registered to colour; its camera: --set camera.depth_x=%g --set "
+        "camera.depth_y=%g --set camera.depth_z=%g --set camera.depth_rx=%g --set "
+        "camera.depth_ry=%g --set camera.depth_rz=%g\n",
+        t.x(), t.y(), t.z(), r.x(), r.y(), r.z());
+  }
   return 0;
 }
 
@@ -189,6 +212,11 @@ void addSynthCommand(CLI::App& app, Command& selected) {
                   "sensor error: depth reads this fraction too far (0.01: 1% too far)")
       ->capture_default_str()
       ->check(CLI::Range(-0.19, 0.19));
+  cmd->add_option("--depth-camera", o->depth_camera,
+                  "depth from a camera of its own, not registered to colour: its position (m) "
+                  "and rotation vector (degrees) in the colour camera's frame, X,Y,Z,RX,RY,RZ "
+                  "(e.g. 0.025,0,0,0,0.5,0; map it with the camera.depth_* keys synthetic.yaml "
+                  "gives)");
   cmd->add_option("--focal-error", o->sequence.focal_error,
                   "sensor error: the lens' focal lengths are this fraction above the declared "
                   "intrinsics (a miscalibrated camera)")

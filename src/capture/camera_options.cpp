@@ -22,6 +22,23 @@ Keys cameraKeys(CameraOptions& o) {
       choice("camera.intrinsics", &o.intrinsics, {"preset", "device"},
              "preset: camera.fx/fy/cx/cy; device: from the OpenNI2 device's field of view or "
              "the ROS camera_info (used anyway with the default preset and camera keys)"),
+      // Unregistered depth (docs/cameras.md#depth-not-registered-to-colour).
+      number("camera.depth_fx", &o.depth_fx, 0, kBig,
+             "depth camera's focal length x (px; 0 = the colour camera's)"),
+      number("camera.depth_fy", &o.depth_fy, 0, kBig,
+             "depth camera's focal length y (px; 0 = the colour camera's)"),
+      number("camera.depth_cx", &o.depth_cx, -kBig, kBig,
+             "depth camera's principal point x (px; 0 = the colour camera's)"),
+      number("camera.depth_cy", &o.depth_cy, -kBig, kBig,
+             "depth camera's principal point y (px; 0 = the colour camera's)"),
+      number("camera.depth_x", &o.depth_x, -1, 1,
+             "depth camera's position in the colour camera's frame, x (m; 0 = registered)"),
+      number("camera.depth_y", &o.depth_y, -1, 1, "depth camera's position, y (m)"),
+      number("camera.depth_z", &o.depth_z, -1, 1, "depth camera's position, z (m)"),
+      number("camera.depth_rx", &o.depth_rx, -0.5, 0.5,
+             "depth camera's rotation in the colour camera's frame, rotation vector x (rad)"),
+      number("camera.depth_ry", &o.depth_ry, -0.5, 0.5, "depth camera's rotation vector, y (rad)"),
+      number("camera.depth_rz", &o.depth_rz, -0.5, 0.5, "depth camera's rotation vector, z (rad)"),
   };
 }
 

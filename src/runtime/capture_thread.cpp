@@ -16,12 +16,14 @@ using Clock = std::chrono::steady_clock;
 }  // namespace
 
 CaptureThread::CaptureThread(FrameSource& source, FrameQueue& queue, RunStats& stats,
-                             RunControl& control, ErrorHandler on_error)
+                             RunControl& control, ErrorHandler on_error,
+                             DepthRegistration* registration)
     : source_(source),
       queue_(queue),
       stats_(stats),
       control_(control),
       on_error_(std::move(on_error)),
+      registration_(registration),
       thread_(control) {
   thread_.start([this] { run(); });
 }
@@ -53,6 +55,7 @@ void CaptureThread::read() {
       waitForCamera();
       continue;
     }
+    if (registration_) registration_->apply(frame->depth);
     stats_.read_latency.record(secondsSince(read_start));
     frame->index = index_++;
     frame->captured_at = steadySeconds();

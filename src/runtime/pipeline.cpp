@@ -3,11 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <fstream>
 #include <mutex>
 
 #include "rgbdmap/mapping/mapper.hpp"
+#include "rgbdmap/capture/depth_registration.hpp"
 #include "rgbdmap/runtime/capture_thread.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
@@ -276,7 +278,17 @@ int Pipeline::run(RunControl& control) {
   const Clock::time_point start = Clock::now();
 
   // The threads: capture -> queue -> tracking -> fusion (-> writer), the status line here.
-  CaptureThread capture(*source_, queue, stats_, control, fail);
+  std::unique_ptr<DepthRegistration> registration;
+  if (!config.camera.depthRegistered()) {
+    registration = std::make_unique<DepthRegistration>(config.camera);
+    const Eigen::Vector3d t = registration->colorFromDepth().translation();
+    spdlog::info(
+        "depth: its own camera, registered to colour on capture (at ({:.4f}, {:.4f}, {:.4f}) m "
+        "and {:.3f} deg from the colour camera)",
+        t.x(), t.y(), t.z(),
+        Eigen::AngleAxisd(registration->colorFromDepth().linear()).angle() * 180.0 / M_PI);
+  }
+  CaptureThread capture(*source_, queue, stats_, control, fail, registration.get());
   // Declared before the fusion thread, which serves its map requests.
   MapPublication publication(outputs_.publisher);
   FusionThread fusion(mapper, kFusionSlots, camera.width, camera.height, fail);

@@ -131,6 +131,17 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
   out << YAML::Key << "loop_seconds" << YAML::Value << o.loop_seconds;
   out << YAML::Key << "path" << YAML::Value << o.path;
   out << YAML::Key << "path_inset" << YAML::Value << o.path_inset;
+  if (!o.depth_camera_position.isZero() || !o.depth_camera_rotation.isZero()) {
+    // The truth `rgbdmap calibrate` and the camera.depth_* keys are checked against.
+    const Eigen::Vector3d& t = o.depth_camera_position;
+    const Eigen::Vector3d& r = o.depth_camera_rotation;
+    out << YAML::Key << "depth_camera" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "position_m" << YAML::Value << YAML::Flow << YAML::BeginSeq << t.x()
+        << t.y() << t.z() << YAML::EndSeq;
+    out << YAML::Key << "rotation_vector_rad" << YAML::Value << YAML::Flow << YAML::BeginSeq
+        << r.x() << r.y() << r.z() << YAML::EndSeq;
+    out << YAML::EndMap;
+  }
   if (o.path == "tour") {
     out << YAML::Key << "tour_speed" << YAML::Value << o.tour_speed;
     out << YAML::Key << "tour_turn_rate" << YAML::Value << o.tour_turn_rate;
@@ -451,6 +462,14 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   cv::Mat depth16(camera.height, camera.width, CV_16UC1);
   cv::Mat visible(camera.height, camera.width, CV_8UC1);
   std::size_t valid_pixels = 0;
+  const bool unregistered =
+      !options.depth_camera_position.isZero() || !options.depth_camera_rotation.isZero();
+  Eigen::Isometry3d color_from_depth = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d& rotation = options.depth_camera_rotation;
+  if (!rotation.isZero())
+    color_from_depth.linear() = Eigen::AngleAxisd(rotation.norm(), rotation.normalized()).matrix();
+  color_from_depth.translation() = options.depth_camera_position;
+  cv::Mat color_depth, color_incidence, color_hits, depth_color;
   std::mt19937_64 stamp_random(options.seed ^ 0x5EEDull);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
 
@@ -459,7 +478,13 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     const double rgb_stamp = options.start_time + t;
     const double depth_stamp =
         rgb_stamp + options.depth_offset + options.depth_offset_jitter * unit(stamp_random);
-    renderer.render(path.pose(t), depth, color, incidence_cos, hits);
+    if (unregistered) {
+      // Colour from the colour camera; depth, and the surface it measures, from the depth one.
+      renderer.render(path.pose(t), color_depth, color, color_incidence, color_hits);
+      renderer.render(path.pose(t) * color_from_depth, depth, depth_color, incidence_cos, hits);
+    } else {
+      renderer.render(path.pose(t), depth, color, incidence_cos, hits);
+    }
     const double gain = 1.0 + options.brightness_drift * std::sin(2.0 * M_PI * t / 6.0);
     if (gain != 1.0) color.convertTo(color, -1, gain);
 
@@ -468,7 +493,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     for (int v = 0; v < camera.height; ++v) {
       const auto* visible_row = visible.ptr<unsigned char>(v);
       const auto* hit_row = hits.ptr<cv::Vec3f>(v);
-      const auto* color_row = color.ptr<cv::Vec3b>(v);
+      const auto* color_row = (unregistered ? depth_color : color).ptr<cv::Vec3b>(v);
       for (int u = 0; u < camera.width; ++u)
         if (visible_row[u]) surface.add(hit_row[u], color_row[u]);
     }

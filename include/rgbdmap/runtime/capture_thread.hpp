@@ -5,6 +5,7 @@
 #include <string>
 
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/capture/depth_registration.hpp"
 #include "rgbdmap/capture/frame_source.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"
 #include "rgbdmap/runtime/run_thread.hpp"
@@ -23,8 +24,9 @@ class CaptureThread {
   using ErrorHandler = std::function<void(const std::string&)>;
 
   // Starts the thread. `on_error` is called once, from the thread, with what made it stop.
+  // `registration`, if any, moves each frame's depth into the colour camera before it is queued.
   CaptureThread(FrameSource& source, FrameQueue& queue, RunStats& stats, RunControl& control,
-                ErrorHandler on_error);
+                ErrorHandler on_error, DepthRegistration* registration = nullptr);
   void join() { thread_.join(); }
 
  private:
@@ -38,6 +40,7 @@ class CaptureThread {
   RunStats& stats_;
   RunControl& control_;
   ErrorHandler on_error_;
+  DepthRegistration* registration_;
   std::uint64_t index_ = 0;                       // the next frame's number
   std::uint64_t index_at_outage_checkpoint_ = 0;  // index_ when the last outage checkpointed
   RunThread thread_;                              // last: started once the members above are ready

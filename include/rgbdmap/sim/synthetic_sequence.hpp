@@ -39,6 +39,11 @@ struct SyntheticSequenceOptions {
   double depth_scale_error = 0.0;
   double focal_error = 0.0;
   double brightness_drift = 0.0;
+  // Depth from a camera of its own, at this pose in the colour camera's frame (translation in
+  // m, rotation vector in rad; zero: registered to colour), with the same intrinsics. The depth
+  // images are the depth camera's; the reference surface is what it measures.
+  Eigen::Vector3d depth_camera_position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d depth_camera_rotation = Eigen::Vector3d::Zero();
   double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
   // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
   // always inside the 0.02 s association window). Both images are rendered at the colour

@@ -1,0 +1,75 @@
+#include "rgbdmap/capture/depth_registration.hpp"
+
+#include <cmath>
+
+namespace rgbdmap {
+
+DepthRegistration::DepthRegistration(const CameraOptions& camera)
+    : color_(camera),
+      fx_(camera.depth_fx > 0 ? camera.depth_fx : camera.fx),
+      fy_(camera.depth_fy > 0 ? camera.depth_fy : camera.fy),
+      cx_(camera.depth_cx != 0 ? camera.depth_cx : camera.cx),
+      cy_(camera.depth_cy != 0 ? camera.depth_cy : camera.cy) {
+  const Eigen::Vector3d r(camera.depth_rx, camera.depth_ry, camera.depth_rz);
+  if (r.norm() > 0) color_from_depth_.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
+  color_from_depth_.translation() = Eigen::Vector3d(camera.depth_x, camera.depth_y, camera.depth_z);
+}
+
+void DepthRegistration::apply(cv::Mat& depth) {
+  const int w = depth.cols, h = depth.rows;
+  if (rays_.size() != static_cast<std::size_t>(w) * h) {
+    rays_.resize(static_cast<std::size_t>(w) * h);
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u)
+        rays_[static_cast<std::size_t>(v) * w + u] = {static_cast<float>((u - cx_) / fx_),
+                                                       static_cast<float>((v - cy_) / fy_)};
+  }
+  // A new image each time: the frame's own may still be shared (a keyframe kept, a source's cache).
+  cv::Mat registered(color_.height, color_.width, CV_32FC1, cv::Scalar(0.0f));
+  const Eigen::Matrix3f R = color_from_depth_.linear().cast<float>();
+  const Eigen::Vector3f t = color_from_depth_.translation().cast<float>();
+  const bool distorted = color_.hasDistortion();
+  const float fx = static_cast<float>(color_.fx), fy = static_cast<float>(color_.fy);
+  const float cx = static_cast<float>(color_.cx), cy = static_cast<float>(color_.cy);
+  for (int v = 0; v < h; ++v) {
+    const float* z_row = depth.ptr<float>(v);
+    for (int u = 0; u < w; ++u) {
+      const float z = z_row[u];
+      if (!(z > 0.0f)) continue;
+      const Eigen::Vector2f& ray = rays_[static_cast<std::size_t>(v) * w + u];
+      const Eigen::Vector3f p = R * Eigen::Vector3f(ray.x() * z, ray.y() * z, z) + t;
+      if (p.z() <= 0.0f) continue;
+      float x = p.x() / p.z(), y = p.y() / p.z();
+      if (distorted) {
+        // Through the colour lens: the colour image is the distorted one.
+        const float r2 = x * x + y * y;
+        const float radial =
+            1.0f + r2 * (static_cast<float>(color_.k1) +
+                         r2 * (static_cast<float>(color_.k2) + r2 * static_cast<float>(color_.k3)));
+        const float p1 = static_cast<float>(color_.p1), p2 = static_cast<float>(color_.p2);
+        const float xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+        const float yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+        x = xd;
+        y = yd;
+      }
+      const int cu = static_cast<int>(std::lround(fx * x + cx));
+      const int cv = static_cast<int>(std::lround(fy * y + cy));
+      if (cu < 0 || cv < 0 || cu >= color_.width || cv >= color_.height) continue;
+      float& out = registered.at<float>(cv, cu);
+      if (out == 0.0f || p.z() < out) out = p.z();  // the nearest surface hides the rest
+    }
+  }
+  // A surface seen more closely by the colour camera spreads over more pixels than it had: fill
+  // the one-pixel cracks between two measured neighbours on the same surface.
+  for (int v = 0; v < registered.rows; ++v) {
+    float* row = registered.ptr<float>(v);
+    for (int u = 1; u + 1 < registered.cols; ++u) {
+      if (row[u] != 0.0f || row[u - 1] == 0.0f || row[u + 1] == 0.0f) continue;
+      if (std::abs(row[u - 1] - row[u + 1]) < 0.02f * row[u - 1])
+        row[u] = 0.5f * (row[u - 1] + row[u + 1]);
+    }
+  }
+  depth = registered;
+}
+
+}  // namespace rgbdmap
