@@ -14,6 +14,8 @@ set(RGBDMAP_LONG_TESTS
   Tracking.SyntheticFastPan
   Tracking.SyntheticDeepRoom
   Tracking.Fr1RpyHead100EveryFrame
+  # An unregistered walk rendered and mapped three times (30 s; the registration itself stays)
+  DepthRegistration.AnUnregisteredWalkMapsAsWellAsARegisteredOneWithItsKeys
   # Real sequences end to end, and runs repeated to compare them (95-160 s under ThreadSanitizer;
   # PipelineReplay.Fr1XyzEndToEnd stays)
   PipelineReplay.Fr1RpyHead100EndToEnd
