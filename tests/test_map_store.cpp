@@ -137,6 +137,16 @@ TEST(MapChanges, NamesTheCellsThatChangedOrEmptiedAndNothingForTheSamePoints) {
   ASSERT_EQ(change.removed.size(), 1u);
   EXPECT_EQ(MapCells::coordinatesOf(change.removed[0]), Eigen::Vector3i(1, 0, 0));
 
+  // Everything again (for a new consumer): every cell, and a cell emptied since still named.
+  MapCloud fewer;
+  for (const auto& p : next.points)
+    if (p.z >= 0.0f) fewer.push_back(p);
+  const MapCells fewer_cells = MapCells::of(fewer);
+  const MapChanges::Change again = changes.next(fewer_cells, true);
+  EXPECT_EQ(again.changed.size(), fewer_cells.cells.size());
+  ASSERT_EQ(again.removed.size(), 1u);
+  EXPECT_EQ(MapCells::coordinatesOf(again.removed[0]), Eigen::Vector3i(2, 1, -1));
+
   changes.forget();
   EXPECT_EQ(changes.next(cells).changed.size(), cells.cells.size());
 }

@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <utility>
 
 #include "rgbdmap/ros/cloud_message.hpp"
 
@@ -33,11 +34,17 @@ RosPublisher::RosPublisher(ros::NodeHandle& private_nh, Options options)
     : options_(std::move(options)) {
   // Latched: a consumer that subscribes later (another machine, a screen) still gets the map.
   map_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>("map", 1, true);
-  // Not latched: the last changes alone would be part of a map. A subscriber is greeted with the
-  // whole map instead, then gets what changes.
+  // Not latched: the last changes alone would be part of a map. When someone subscribes, every
+  // cell of the last map goes out again (on this publisher's thread: a building's map takes a
+  // second to group, which ROS's callback threads must not wait for), then what changes.
   changes_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>(
-      "map_changes", 4,
-      [this](const ros::SingleSubscriberPublisher& s) { greetChangesSubscriber(s); });
+      "map_changes", 4, [this](const ros::SingleSubscriberPublisher&) {
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          resend_changes_ = true;
+        }
+        wake_.notify_one();
+      });
   pose_pub_ = private_nh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   if (options_.grid_interval >= 0.0)
     grid_pub_ = private_nh.advertise<nav_msgs::OccupancyGrid>("grid", 1, true);
@@ -96,7 +103,7 @@ void RosPublisher::publishUp(const UpEvidence& evidence) {
 void RosPublisher::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    wake_.wait(lock, [&] { return stop_ || !poses_.empty() || map_; });
+    wake_.wait(lock, [&] { return stop_ || !poses_.empty() || map_ || resend_changes_; });
     while (!poses_.empty()) {
       const StampedPose p = poses_.front();
       poses_.pop_front();
@@ -109,9 +116,10 @@ void RosPublisher::run() {
       map_.reset();
       const double stamp = last_stamp_;
       const UpEvidence up = up_;
+      const bool everything = std::exchange(resend_changes_, false);
       lock.unlock();
       sendMap(*map, stamp);
-      sendChanges(map, stamp);
+      sendChanges(map, stamp, everything);
       if (options_.grid_interval >= 0.0) {
         if (now() >= next_grid_at_) {
           sendGrid(*map, up, stamp);
@@ -123,6 +131,11 @@ void RosPublisher::run() {
       }
       next_map_at_.store(now() + options_.map_interval);
       map_pending_.store(false);
+      lock.lock();
+    }
+    if (std::exchange(resend_changes_, false) && changes_map_) {
+      lock.unlock();
+      sendChanges(changes_map_, changes_stamp_, true);
       lock.lock();
     }
     if (stop_ && poses_.empty() && !map_) break;
@@ -199,34 +212,24 @@ void RosPublisher::sendMap(const MapCloud& map, double stamp) {
   maps_published_.fetch_add(1);
 }
 
-void RosPublisher::sendChanges(const std::shared_ptr<const MapCloud>& map, double stamp) {
-  std::lock_guard<std::mutex> lock(changes_mutex_);
+void RosPublisher::sendChanges(const std::shared_ptr<const MapCloud>& map, double stamp,
+                               bool everything) {
   changes_map_ = map;
   changes_stamp_ = stamp;
   if (changes_pub_.getNumSubscribers() == 0) {
-    changes_known_ = false;  // nobody to tell: a subscriber is greeted with the whole map
+    changes_known_ = false;  // nobody to tell: whoever subscribes gets every cell
     return;
   }
-  if (!changes_known_) changes_.forget();  // those who subscribed since were greeted with less
   const MapCells cells = MapCells::of(*map);
-  const MapChanges::Change change = changes_.next(cells);
+  // Removed cells are named against the last map grouped, even when all of this one is sent:
+  // a consumer that had that map must lose them.
+  const MapChanges::Change change = changes_.next(cells, everything || !changes_known_);
   changes_known_ = true;
   if (change.changed.empty() && change.removed.empty()) return;
   changes_pub_.publish(toCellChangesMessage(*map, cells, change, options_.map_frame, stamp));
-}
-
-void RosPublisher::greetChangesSubscriber(const ros::SingleSubscriberPublisher& subscriber) {
-  std::lock_guard<std::mutex> lock(changes_mutex_);
-  if (!changes_map_) return;  // no map yet: the first changes will be every cell
-  const MapCells cells = MapCells::of(*changes_map_);
-  MapChanges whole;
-  const MapChanges::Change everything = whole.next(cells);
-  subscriber.publish(
-      toCellChangesMessage(*changes_map_, cells, everything, options_.map_frame, changes_stamp_));
-  if (!changes_known_) {
-    changes_ = std::move(whole);
-    changes_known_ = true;
-  }
+  if (everything)
+    spdlog::info("{}: every cell of the map sent ({} points, {} subscribers)",
+                 changes_pub_.getTopic(), map->size(), changes_pub_.getNumSubscribers());
 }
 
 }  // namespace rgbdmap

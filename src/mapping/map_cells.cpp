@@ -59,14 +59,14 @@ MapCells MapCells::of(const MapCloud& map) {
   return out;
 }
 
-MapChanges::Change MapChanges::next(const MapCells& now) {
+MapChanges::Change MapChanges::next(const MapCells& now, bool everything) {
   Change change;
   std::unordered_map<std::uint64_t, Seen> seen;
   seen.reserve(now.cells.size());
   for (const auto& [key, cell] : now.cells) {
     seen[key] = {cell.hash, cell.points.size()};
     const auto before = last_.find(key);
-    if (before == last_.end() || before->second.hash != cell.hash ||
+    if (everything || before == last_.end() || before->second.hash != cell.hash ||
         before->second.count != cell.points.size())
       change.changed.push_back(key);
   }

@@ -41,8 +41,9 @@ class MapChanges {
   };
 
   // Compares `now` with the map given last (everything is new at the first call, or after
-  // forget()) and remembers `now`.
-  Change next(const MapCells& now);
+  // forget()) and remembers `now`. With `everything`, every cell of `now` counts as changed
+  // (for a consumer that has none of it), and the removed ones are still named.
+  Change next(const MapCells& now, bool everything = false);
   void forget() { last_.clear(); }
 
  private:

@@ -60,19 +60,18 @@ class RosPublisher : public MapPublisher {
   void run();
   void sendPose(double stamp, const Eigen::Isometry3d& pose);
   void sendMap(const MapCloud& map, double stamp);
-  void sendChanges(const std::shared_ptr<const MapCloud>& map, double stamp);
-  void greetChangesSubscriber(const ros::SingleSubscriberPublisher& subscriber);
+  void sendChanges(const std::shared_ptr<const MapCloud>& map, double stamp, bool everything);
   void sendGrid(const MapCloud& map, const UpEvidence& up, double stamp);
 
   Options options_;
   ros::Publisher map_pub_, changes_pub_, pose_pub_, grid_pub_;
-  // ~map_changes: the last map sent (what a new subscriber gets whole) and its cells' hashes,
-  // shared by the publishing thread and ROS's connection callbacks.
-  std::mutex changes_mutex_;
+  // ~map_changes, the publishing thread's own: the last map (sent whole again, every cell, when
+  // someone subscribes) and its cells' hashes.
   std::shared_ptr<const MapCloud> changes_map_;
   double changes_stamp_ = 0.0;
   MapChanges changes_;
   bool changes_known_ = false;  // changes_ holds changes_map_'s cells
+  bool resend_changes_ = false;  // under mutex_: a subscriber came, send every cell
   tf2_ros::TransformBroadcaster tf_;
 
   mutable std::mutex mutex_;
