@@ -132,8 +132,8 @@ TEST(MapChanges, NamesTheCellsThatChangedOrEmptiedAndNothingForTheSamePoints) {
   const MapChanges::Change change = changes.next(cells);
   ASSERT_EQ(change.changed.size(), 1u);
   EXPECT_EQ(MapCells::coordinatesOf(change.changed[0]), Eigen::Vector3i(2, 1, -1));
-  EXPECT_EQ(cells.cells.at(change.changed[0]).points, std::vector<std::uint32_t>{
-                                                          static_cast<std::uint32_t>(next.size() - 1)});
+  EXPECT_EQ(cells.cells.at(change.changed[0]).points,
+            std::vector<std::uint32_t>{static_cast<std::uint32_t>(next.size() - 1)});
   ASSERT_EQ(change.removed.size(), 1u);
   EXPECT_EQ(MapCells::coordinatesOf(change.removed[0]), Eigen::Vector3i(1, 0, 0));
 

@@ -233,11 +233,11 @@ int runNode(RunControl& control, RunSignals& signals) {
                         mode->maps() ? settings.out : outputs.frame_trajectory_path,
                         settings.octomap);
   // What the node publishes (localising: the pose alone) and the services that write the map.
-  const std::string published = mode->maps()
-                                    ? fmt::format("{}, {}, {} and {}", pnh.resolveName("map"),
-                                                  pnh.resolveName("map_changes"),
-                                                  pnh.resolveName("grid"), pnh.resolveName("pose"))
-                                    : pnh.resolveName("pose");
+  const std::string published =
+      mode->maps()
+          ? fmt::format("{}, {}, {} and {}", pnh.resolveName("map"), pnh.resolveName("map_changes"),
+                        pnh.resolveName("grid"), pnh.resolveName("pose"))
+          : pnh.resolveName("pose");
   spdlog::info("{}: publishing {}, TF {} -> {}{}", mode->name(), published, publish.map_frame,
                publish.camera_frame, mode->maps() ? "; services " + services.describe() : "");
   if (settings.lossless)

@@ -144,7 +144,8 @@ bool applyCellChanges(const sensor_msgs::PointCloud2& msg, CellMap& map, std::st
     }
   for (const int offset : offsets)
     if (offset < 0) {
-      error = "not a map's changes (fields x, y, z, rgb as float32, cell_x, cell_y, cell_z as int32)";
+      error =
+          "not a map's changes (fields x, y, z, rgb as float32, cell_x, cell_y, cell_z as int32)";
       return false;
     }
   if (msg.is_bigendian || msg.height != 1 ||

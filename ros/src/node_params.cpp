@@ -97,8 +97,8 @@ void applyPrivateParams(const ros::NodeHandle& nh, Config& config) {
   std::vector<std::string> names;
   const std::string prefix = nh.getNamespace() + "/";
   const std::set<std::string> settings = {
-      "config",        "out",     "stats",   "map_frame", "camera_frame", "map_interval",
-      "grid_interval", "grid",    "octomap", "localise",  "continue",     "session_interval",
+      "config",        "out",      "stats",         "map_frame", "camera_frame", "map_interval",
+      "grid_interval", "grid",     "octomap",       "localise",  "continue",     "session_interval",
       "session_rate",  "lossless", "map_max_points"};
   std::set<std::string> keys;
   for (const Key& key : config.keys()) keys.insert(key.name);

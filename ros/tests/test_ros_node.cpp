@@ -207,7 +207,8 @@ TEST_F(RosNode, MapsABagPlayedAtThePaceItKeeps) {
   ASSERT_TRUE(waitUntil([&] { return changes.points().size() >= kMapPoints; }, 30))
       << changes.points().size() << " points from " << changes.messages << " changes\n"
       << readFile(node_log);
-  ASSERT_TRUE(waitUntil([&] { return got.largest_map.load() >= std::min(kMapPoints, kMaxPoints / 2); }, 30))
+  ASSERT_TRUE(
+      waitUntil([&] { return got.largest_map.load() >= std::min(kMapPoints, kMaxPoints / 2); }, 30))
       << got.largest_map.load() << " points\n"
       << readFile(node_log);
   EXPECT_LE(got.largest_map.load(), kMaxPoints);

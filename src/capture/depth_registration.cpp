@@ -11,7 +11,8 @@ DepthRegistration::DepthRegistration(const CameraOptions& camera)
       cx_(camera.depth_cx != 0 ? camera.depth_cx : camera.cx),
       cy_(camera.depth_cy != 0 ? camera.depth_cy : camera.cy) {
   const Eigen::Vector3d r(camera.depth_rx, camera.depth_ry, camera.depth_rz);
-  if (r.norm() > 0) color_from_depth_.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
+  if (r.norm() > 0)
+    color_from_depth_.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
   color_from_depth_.translation() = Eigen::Vector3d(camera.depth_x, camera.depth_y, camera.depth_z);
 }
 
@@ -22,7 +23,7 @@ void DepthRegistration::apply(cv::Mat& depth) {
     for (int v = 0; v < h; ++v)
       for (int u = 0; u < w; ++u)
         rays_[static_cast<std::size_t>(v) * w + u] = {static_cast<float>((u - cx_) / fx_),
-                                                       static_cast<float>((v - cy_) / fy_)};
+                                                      static_cast<float>((v - cy_) / fy_)};
   }
   // A new image each time: the frame's own may still be shared (a keyframe kept, a source's cache).
   cv::Mat registered(color_.height, color_.width, CV_32FC1, cv::Scalar(0.0f));

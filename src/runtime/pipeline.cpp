@@ -3,13 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <mutex>
 
-#include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/capture/depth_registration.hpp"
+#include "rgbdmap/mapping/mapper.hpp"
 #include "rgbdmap/runtime/capture_thread.hpp"
 #include "rgbdmap/runtime/checkpoint_writer.hpp"
 #include "rgbdmap/runtime/frame_queue.hpp"

@@ -4,8 +4,8 @@
 
 #include <cstddef>
 #include <map>
-#include <tuple>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "rgbdmap/mapping/map_cells.hpp"

@@ -31,7 +31,7 @@ class RosPublisher : public MapPublisher {
   struct Options {
     std::string map_frame = "map";
     std::string camera_frame = "camera_rgb_optical_frame";
-    double map_interval = 2.0;   // seconds between maps at most
+    double map_interval = 2.0;  // seconds between maps at most
     // ~map's points at most (0: the whole map); ~map_changes always has every point of a cell.
     std::size_t map_max_points = 2'000'000;
     double grid_interval = 5.0;  // seconds between grids at most; negative: no grid
@@ -70,7 +70,7 @@ class RosPublisher : public MapPublisher {
   std::shared_ptr<const MapCloud> changes_map_;
   double changes_stamp_ = 0.0;
   MapChanges changes_;
-  bool changes_known_ = false;  // changes_ holds changes_map_'s cells
+  bool changes_known_ = false;   // changes_ holds changes_map_'s cells
   bool resend_changes_ = false;  // under mutex_: a subscriber came, send every cell
   tf2_ros::TransformBroadcaster tf_;
 
