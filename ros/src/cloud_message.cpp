@@ -2,6 +2,7 @@
 
 #include <sensor_msgs/PointField.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -18,6 +19,29 @@ sensor_msgs::PointField field(const char* name, std::uint32_t offset,
   f.datatype = datatype;
   f.count = 1;
   return f;
+}
+
+// A point's x, y, z and packed rgb, 16 bytes, as both message kinds hold them.
+void putPoint(const pcl::PointXYZRGB& p, std::uint8_t* out) {
+  std::memcpy(out, &p.x, 4);
+  std::memcpy(out + 4, &p.y, 4);
+  std::memcpy(out + 8, &p.z, 4);
+  std::memcpy(out + 12, &p.rgb, 4);
+}
+
+// Where the fields `names` start in each point of `msg` (found by name and type, inside the point),
+// -1 for those it lacks.
+template <std::size_t N>
+std::array<int, N> fieldOffsets(const sensor_msgs::PointCloud2& msg,
+                                const std::array<const char*, N>& names,
+                                const std::array<std::uint8_t, N>& types) {
+  std::array<int, N> offsets;
+  offsets.fill(-1);
+  for (const sensor_msgs::PointField& f : msg.fields)
+    for (std::size_t i = 0; i < N; ++i)
+      if (f.name == names[i] && f.datatype == types[i] && f.offset + 4 <= msg.point_step)
+        offsets[i] = static_cast<int>(f.offset);
+  return offsets;
 }
 
 }  // namespace
@@ -41,24 +65,16 @@ sensor_msgs::PointCloud2 toCloudMessage(const MapCloud& map, const std::string& 
   msg.data.resize(static_cast<std::size_t>(msg.row_step));
   std::uint8_t* out = msg.data.data();
   for (std::size_t i = 0; i < map.size(); i += every) {
-    const pcl::PointXYZRGB& p = map.points[i];
-    std::memcpy(out, &p.x, 4);
-    std::memcpy(out + 4, &p.y, 4);
-    std::memcpy(out + 8, &p.z, 4);
-    std::memcpy(out + 12, &p.rgb, 4);
+    putPoint(map.points[i], out);
     out += kStep;
   }
   return msg;
 }
 
 bool fromCloudMessage(const sensor_msgs::PointCloud2& msg, MapCloud& map, std::string& error) {
-  int offsets[4] = {-1, -1, -1, -1};
-  const char* names[4] = {"x", "y", "z", "rgb"};
-  for (const sensor_msgs::PointField& f : msg.fields)
-    for (int i = 0; i < 4; ++i)
-      if (f.name == names[i] && f.datatype == sensor_msgs::PointField::FLOAT32 &&
-          f.offset + 4 <= msg.point_step)
-        offsets[i] = static_cast<int>(f.offset);
+  constexpr std::uint8_t kFloat = sensor_msgs::PointField::FLOAT32;
+  const std::array<int, 4> offsets =
+      fieldOffsets<4>(msg, {"x", "y", "z", "rgb"}, {kFloat, kFloat, kFloat, kFloat});
   if (offsets[0] < 0 || offsets[1] < 0 || offsets[2] < 0) {
     error = "no float32 x, y and z fields";
     return false;
@@ -117,11 +133,7 @@ sensor_msgs::PointCloud2 toCellChangesMessage(const MapCloud& map, const MapCell
   };
   for (const std::uint64_t key : change.changed)
     for (const std::uint32_t i : cells.cells.at(key).points) {
-      const pcl::PointXYZRGB& p = map.points[i];
-      std::memcpy(out, &p.x, 4);
-      std::memcpy(out + 4, &p.y, 4);
-      std::memcpy(out + 8, &p.z, 4);
-      std::memcpy(out + 12, &p.rgb, 4);
+      putPoint(map.points[i], out);
       putCell(key);
     }
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -134,14 +146,11 @@ sensor_msgs::PointCloud2 toCellChangesMessage(const MapCloud& map, const MapCell
 }
 
 bool applyCellChanges(const sensor_msgs::PointCloud2& msg, CellMap& map, std::string& error) {
-  const char* names[7] = {"x", "y", "z", "rgb", "cell_x", "cell_y", "cell_z"};
-  int offsets[7] = {-1, -1, -1, -1, -1, -1, -1};
-  for (const sensor_msgs::PointField& f : msg.fields)
-    for (int i = 0; i < 7; ++i) {
-      const auto type = i < 4 ? sensor_msgs::PointField::FLOAT32 : sensor_msgs::PointField::INT32;
-      if (f.name == names[i] && f.datatype == type && f.offset + 4 <= msg.point_step)
-        offsets[i] = static_cast<int>(f.offset);
-    }
+  constexpr std::uint8_t kFloat = sensor_msgs::PointField::FLOAT32;
+  constexpr std::uint8_t kInt = sensor_msgs::PointField::INT32;
+  const std::array<int, 7> offsets =
+      fieldOffsets<7>(msg, {"x", "y", "z", "rgb", "cell_x", "cell_y", "cell_z"},
+                      {kFloat, kFloat, kFloat, kFloat, kInt, kInt, kInt});
   for (const int offset : offsets)
     if (offset < 0) {
       error =

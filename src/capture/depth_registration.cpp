@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "rgbdmap/capture/lens_undistortion.hpp"
+
 namespace rgbdmap {
 
 DepthRegistration::DepthRegistration(const CameraOptions& camera)
@@ -41,18 +43,8 @@ void DepthRegistration::apply(cv::Mat& depth) {
       const Eigen::Vector3f p = R * Eigen::Vector3f(ray.x() * z, ray.y() * z, z) + t;
       if (p.z() <= 0.0f) continue;
       float x = p.x() / p.z(), y = p.y() / p.z();
-      if (distorted) {
-        // Through the colour lens: the colour image is the distorted one.
-        const float r2 = x * x + y * y;
-        const float radial =
-            1.0f + r2 * (static_cast<float>(color_.k1) +
-                         r2 * (static_cast<float>(color_.k2) + r2 * static_cast<float>(color_.k3)));
-        const float p1 = static_cast<float>(color_.p1), p2 = static_cast<float>(color_.p2);
-        const float xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
-        const float yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
-        x = xd;
-        y = yd;
-      }
+      // Through the colour lens: the colour image is the distorted one.
+      if (distorted) LensUndistortion::distortRay(color_, x, y);
       const int cu = static_cast<int>(std::lround(fx * x + cx));
       const int cv = static_cast<int>(std::lround(fy * y + cy));
       if (cu < 0 || cv < 0 || cu >= color_.width || cv >= color_.height) continue;

@@ -57,4 +57,16 @@ void LensUndistortion::rays(const CameraIntrinsics& lens, const std::vector<cv::
   cv::undistortPoints(pixels, rays, lens.cameraMatrix(), lens.distortion());
 }
 
+void LensUndistortion::distortRay(const CameraIntrinsics& lens, float& x, float& y) {
+  const float r2 = x * x + y * y;
+  const float radial =
+      1.0f + r2 * (static_cast<float>(lens.k1) +
+                   r2 * (static_cast<float>(lens.k2) + r2 * static_cast<float>(lens.k3)));
+  const float p1 = static_cast<float>(lens.p1), p2 = static_cast<float>(lens.p2);
+  const float xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+  const float yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+  x = xd;
+  y = yd;
+}
+
 }  // namespace rgbdmap

@@ -36,6 +36,9 @@ class LensUndistortion {
   // Normalised coordinates (x/z, y/z) of the rays through raw pixel positions (subpixel).
   static void rays(const CameraIntrinsics& lens, const std::vector<cv::Point2f>& pixels,
                    std::vector<cv::Point2f>& rays);
+  // The other way: a ray's normalised coordinates (x/z, y/z) as the lens bends them, before the
+  // camera matrix (what OpenCV's projectPoints does per point).
+  static void distortRay(const CameraIntrinsics& lens, float& x, float& y);
 
  private:
   cv::Size raw_size_, size_;

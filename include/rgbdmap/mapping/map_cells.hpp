@@ -40,11 +40,10 @@ class MapChanges {
     std::vector<std::uint64_t> removed;  // cells that had points and have none now, in key order
   };
 
-  // Compares `now` with the map given last (everything is new at the first call, or after
-  // forget()) and remembers `now`. With `everything`, every cell of `now` counts as changed
+  // Compares `now` with the map given last (everything is new at the first call) and remembers
+  // `now`. With `everything`, every cell of `now` counts as changed
   // (for a consumer that has none of it), and the removed ones are still named.
   Change next(const MapCells& now, bool everything = false);
-  void forget() { last_.clear(); }
 
  private:
   struct Seen {
