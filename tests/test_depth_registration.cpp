@@ -20,12 +20,7 @@ const Eigen::Vector3d kPosition(0.025, 0.003, -0.002);
 const Eigen::Vector3d kRotationDeg(0.3, -0.8, 0.2);
 
 CameraOptions unregisteredCamera() {
-  CameraOptions camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = camera.fy = 525.0;
-  camera.cx = 319.5;
-  camera.cy = 239.5;
+  CameraOptions camera;  // 640 x 480, f 525: the synthetic sequences' camera
   camera.depth_x = kPosition.x();
   camera.depth_y = kPosition.y();
   camera.depth_z = kPosition.z();
