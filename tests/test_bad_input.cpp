@@ -317,5 +317,21 @@ TEST(BadInput, SynthNamesABadSceneFile) {
   EXPECT_NE(output.find(dir + "/missing.yaml"), std::string::npos) << output;
 }
 
+TEST(BadInput, SynthRefusesADepthCameraItCannotRead) {
+  const std::string dir = test::freshDir();
+  // Too few numbers, and a depth camera half a metre from the colour one.
+  for (const char* value : {"0.025,0,0", "0.5,0,0,0,0,0"}) {
+    std::string output;
+    EXPECT_EQ(test::run(test::binary() + " synth --frames 2 --out " + dir +
+                            "/room --depth-camera " + value,
+                        &output),
+              2);
+    EXPECT_NE(output.find(std::string("--depth-camera '") + value + "': expected X,Y,Z,RX,RY,RZ"),
+              std::string::npos)
+        << output;
+    EXPECT_FALSE(fs::exists(dir + "/room/rgb.txt"));
+  }
+}
+
 }  // namespace
 }  // namespace rgbdmap

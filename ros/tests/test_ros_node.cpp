@@ -509,6 +509,8 @@ TEST_F(RosNode, BadParameterIsOneClearMessage) {
   refused("octomap", {"_continue:=" + session, "_octomap:=" + dir_ + "/m.bt"},
           "parameter /octomap/continue: a session keeps no free space to go on from");
   refused("missing", {"_continue:=" + session, "_out:=" + dir_ + "/more.pcd"}, session);
+  refused("thinned", {"_map_max_points:=0.5"},
+          "parameter /thinned/map_max_points: must be a whole number of points >= 0");
 }
 
 TEST_F(RosNode, UnsupportedEncodingIsOneClearMessage) {
