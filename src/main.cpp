@@ -84,11 +84,7 @@ int runMapping(const CommandLine& o, rgbdmap::RunControl& control, rgbdmap::RunS
   if (!o.octomap.empty()) checkOutputFolder(o.octomap, "--octomap");
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   if (!o.rate.empty()) config.set("replay.rate", o.rate == "max" ? "0" : o.rate, "--rate");
-  for (const std::string& s : o.sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
-    config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
-  }
+  config.setAll(o.sets, "--set");
   // Mapping, or a saved session to start from: localised in (nothing mapped) or continued.
   const std::shared_ptr<const RunMode> mode = chooseRunMode(
       {o.out, o.localise, o.continue_from, !o.mesh.empty(), !o.grid.empty(), !o.octomap.empty()},

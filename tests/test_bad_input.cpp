@@ -331,6 +331,14 @@ TEST(BadInput, SynthRefusesADepthCameraItCannotRead) {
         << output;
     EXPECT_FALSE(fs::exists(dir + "/room/rgb.txt"));
   }
+  // A depth camera's focal length no lens has.
+  std::string output;
+  EXPECT_EQ(test::run(test::binary() + " synth --frames 2 --out " + dir +
+                          "/room --depth-camera 0.025,0,0,0,0,0 --depth-focal 50",
+                      &output),
+            2);
+  EXPECT_NE(output.find("--depth-focal 50"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(dir + "/room/rgb.txt"));
 }
 
 }  // namespace

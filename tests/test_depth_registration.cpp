@@ -110,10 +110,13 @@ WalkRun mapWalk(const std::string& sequence, const std::string& out, const std::
 
 TEST(DepthRegistration, AnUnregisteredWalkMapsAsWellAsARegisteredOneWithItsKeys) {
   const std::string walk = " --frames 180 --fps 15 --room 6x5x3 --path walk --loop-seconds 20";
+  // A depth camera with a focal length of its own, as a Kinect's (580 px beside colour's 525).
   const std::string unregistered = test::sharedSynthetic(
-      "walk_180_unregistered", walk + " --depth-camera 0.025,0.003,-0.002,0.3,-0.8,0.2");
+      "walk_180_unregistered_f580",
+      walk + " --depth-camera 0.025,0.003,-0.002,0.3,-0.8,0.2 --depth-focal 580");
   const Eigen::Vector3d r = kRotationDeg * M_PI / 180.0;
   const std::string keys =
+      " --set camera.depth_fx=580 --set camera.depth_fy=580"
       " --set camera.depth_x=0.025 --set camera.depth_y=0.003"
       " --set camera.depth_z=-0.002 --set camera.depth_rx=" +
       std::to_string(r.x()) + " --set camera.depth_ry=" + std::to_string(r.y()) +

@@ -259,11 +259,7 @@ int record(const RecordOptions& o) {
   Config config;
   config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
   config.set("replay.rate", "0", "record");  // recordings and folders: every frame, lossless
-  for (const std::string& s : o.sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos) throw InputError("--set " + s + ": expected key=value");
-    config.set(s.substr(0, eq), s.substr(eq + 1), "--set");
-  }
+  config.setAll(o.sets, "--set");
   return o.format == "fakenect" ? recordFakenect(o, config, control)
                                 : recordTum(o, config, control);
 }

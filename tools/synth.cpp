@@ -1,5 +1,7 @@
 // `rgbdmap synth`: a synthetic TUM-layout sequence of a room with exact geometry, to map and
 // score without a camera or a download.
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -90,6 +92,9 @@ int synth(const SynthOptions& o, bool noise_seed_given, bool frames_given,
     options.depth_camera_position = {v[0], v[1], v[2]};
     options.depth_camera_rotation = Eigen::Vector3d(v[3], v[4], v[5]) * M_PI / 180.0;
   }
+  if (options.depth_focal != 0 && !(options.depth_focal >= 100 && options.depth_focal <= 3000))
+    throw InputError("synth: --depth-focal " + fmt::format("{:g}", options.depth_focal) +
+                     ": expected a focal length of 100-3000 px (or 0: the colour camera's)");
   const SyntheticScene scene = sceneFor(o, surface_voxel_given, options);
   if (!o.write_scene.empty()) {
     try {
@@ -119,14 +124,16 @@ int synth(const SynthOptions& o, bool noise_seed_given, bool frames_given,
       "rgbdmap evaluate map map.pcd --scene %s\n",
       summary.frames, o.out.c_str(), summary.seconds, 100.0 * summary.valid_depth_share,
       summary.surface_points, o.out.c_str(), o.out.c_str());
-  if (!o.depth_camera.empty()) {
+  if (options.depthUnregistered()) {
     const Eigen::Vector3d& t = options.depth_camera_position;
     const Eigen::Vector3d& r = options.depth_camera_rotation;
+    const double f = options.depth_focal > 0 ? options.depth_focal : options.camera.fx;
     std::printf(
-        "depth is not registered to colour; its camera: --set camera.depth_x=%g --set "
-        "camera.depth_y=%g --set camera.depth_z=%g --set camera.depth_rx=%g --set "
-        "camera.depth_ry=%g --set camera.depth_rz=%g\n",
-        t.x(), t.y(), t.z(), r.x(), r.y(), r.z());
+        "depth is not registered to colour; its camera: --set camera.depth_fx=%g --set "
+        "camera.depth_fy=%g --set camera.depth_x=%g --set camera.depth_y=%g --set "
+        "camera.depth_z=%g --set camera.depth_rx=%g --set camera.depth_ry=%g --set "
+        "camera.depth_rz=%g\n",
+        f, f, t.x(), t.y(), t.z(), r.x(), r.y(), r.z());
   }
   return 0;
 }
@@ -217,6 +224,10 @@ void addSynthCommand(CLI::App& app, Command& selected) {
                   "and rotation vector (degrees) in the colour camera's frame, X,Y,Z,RX,RY,RZ "
                   "(e.g. 0.025,0,0,0,0.5,0; map it with the camera.depth_* keys synthetic.yaml "
                   "gives)");
+  cmd->add_option("--depth-focal", o->sequence.depth_focal,
+                  "depth from a camera of its own with this focal length (px; 0: the colour "
+                  "camera's declared one), e.g. a Kinect's 580; with --focal-error, only the "
+                  "colour lens errs");
   cmd->add_option("--focal-error", o->sequence.focal_error,
                   "sensor error: the lens' focal lengths are this fraction above the declared "
                   "intrinsics (a miscalibrated camera)")

@@ -1,5 +1,7 @@
 #include "rgbdmap/config/config.hpp"
 
+#include "rgbdmap/base/error.hpp"
+
 namespace rgbdmap {
 
 Keys Config::keys() {
@@ -35,6 +37,14 @@ Keys Config::keys() {
 void Config::set(const std::string& key, const std::string& value, const std::string& origin) {
   Keys all = keys();
   setKey(all, key, value, origin);
+}
+
+void Config::setAll(const std::vector<std::string>& assignments, const std::string& origin) {
+  for (const std::string& s : assignments) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos) throw InputError(origin + " " + s + ": expected key=value");
+    set(s.substr(0, eq), s.substr(eq + 1), origin);
+  }
 }
 
 void Config::loadYaml(const std::string& path) {

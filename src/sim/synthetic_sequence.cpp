@@ -56,6 +56,8 @@ void validate(const SyntheticSequenceOptions& o) {
   require(o.path_inset >= 0.0, "path_inset must not be negative");
   require(std::abs(o.depth_scale_error) < 0.2, "depth_scale_error must be within +-0.2");
   require(std::abs(o.focal_error) < 0.2, "focal_error must be within +-0.2");
+  require(o.depth_focal == 0 || (o.depth_focal >= 100 && o.depth_focal <= 3000),
+          "depth_focal must be 0 (the declared focal length) or 100-3000 px");
   require(o.brightness_drift >= 0.0 && o.brightness_drift < 0.9,
           "brightness_drift must be in [0, 0.9)");
   require(o.depth_offset >= 0.0 && o.depth_offset_jitter >= 0.0 &&
@@ -131,7 +133,7 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
   out << YAML::Key << "loop_seconds" << YAML::Value << o.loop_seconds;
   out << YAML::Key << "path" << YAML::Value << o.path;
   out << YAML::Key << "path_inset" << YAML::Value << o.path_inset;
-  if (!o.depth_camera_position.isZero() || !o.depth_camera_rotation.isZero()) {
+  if (o.depthUnregistered()) {
     // The truth `rgbdmap calibrate` and the camera.depth_* keys are checked against.
     const Eigen::Vector3d& t = o.depth_camera_position;
     const Eigen::Vector3d& r = o.depth_camera_rotation;
@@ -140,6 +142,8 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
         << t.y() << t.z() << YAML::EndSeq;
     out << YAML::Key << "rotation_vector_rad" << YAML::Value << YAML::Flow << YAML::BeginSeq
         << r.x() << r.y() << r.z() << YAML::EndSeq;
+    out << YAML::Key << "focal_px" << YAML::Value
+        << (o.depth_focal > 0 ? o.depth_focal : o.camera.fx);
     out << YAML::EndMap;
   }
   if (o.path == "tour") {
@@ -457,13 +461,16 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
   lens.fx *= 1.0 + options.focal_error;
   lens.fy *= 1.0 + options.focal_error;
   const SyntheticRenderer renderer(scene, lens);
+  // A depth camera of its own has exact intrinsics (those the camera.depth_* keys declare).
+  CameraIntrinsics depth_lens = camera;
+  if (options.depth_focal > 0) depth_lens.fx = depth_lens.fy = options.depth_focal;
+  const SyntheticRenderer depth_renderer(scene, depth_lens);
   SurfaceSampler surface(options.surface_voxel);
   cv::Mat depth, color, incidence_cos, hits;
   cv::Mat depth16(camera.height, camera.width, CV_16UC1);
   cv::Mat visible(camera.height, camera.width, CV_8UC1);
   std::size_t valid_pixels = 0;
-  const bool unregistered =
-      !options.depth_camera_position.isZero() || !options.depth_camera_rotation.isZero();
+  const bool unregistered = options.depthUnregistered();
   Eigen::Isometry3d color_from_depth = Eigen::Isometry3d::Identity();
   const Eigen::Vector3d& rotation = options.depth_camera_rotation;
   if (!rotation.isZero())
@@ -481,7 +488,8 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     if (unregistered) {
       // Colour from the colour camera; depth, and the surface it measures, from the depth one.
       renderer.render(path.pose(t), color_depth, color, color_incidence, color_hits);
-      renderer.render(path.pose(t) * color_from_depth, depth, depth_color, incidence_cos, hits);
+      depth_renderer.render(path.pose(t) * color_from_depth, depth, depth_color, incidence_cos,
+                            hits);
     } else {
       renderer.render(path.pose(t), depth, color, incidence_cos, hits);
     }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "rgbdmap/base/option_keys.hpp"
 #include "rgbdmap/base/option_sections.hpp"
@@ -47,6 +48,8 @@ struct Config {
   // Sets one key from text; throws InputError naming the key (and `origin`) when the key is
   // unknown or the value is invalid or out of range.
   void set(const std::string& key, const std::string& value, const std::string& origin);
+  // Sets each "key=value" of `assignments` (the command line's --set, named by `origin`).
+  void setAll(const std::vector<std::string>& assignments, const std::string& origin);
   // Applies a YAML file (nested maps, e.g. `map: {voxel_size: 0.01}`); throws InputError.
   void loadYaml(const std::string& path);
   // Loads a preset by name from the config folder ("tum_fr1") or a path to a YAML file.

@@ -40,10 +40,16 @@ struct SyntheticSequenceOptions {
   double focal_error = 0.0;
   double brightness_drift = 0.0;
   // Depth from a camera of its own, at this pose in the colour camera's frame (translation in
-  // m, rotation vector in rad; zero: registered to colour), with the same intrinsics. The depth
-  // images are the depth camera's; the reference surface is what it measures.
+  // m, rotation vector in rad; zero: registered to colour), with the declared intrinsics but
+  // for its focal length (depth_focal px; 0: the declared one). The depth images are the depth
+  // camera's; the reference surface is what it measures. Its intrinsics are exact: focal_error
+  // is then the colour camera's alone (what `rgbdmap calibrate` is to find).
   Eigen::Vector3d depth_camera_position = Eigen::Vector3d::Zero();
   Eigen::Vector3d depth_camera_rotation = Eigen::Vector3d::Zero();
+  double depth_focal = 0.0;
+  bool depthUnregistered() const {
+    return !depth_camera_position.isZero() || !depth_camera_rotation.isZero() || depth_focal > 0;
+  }
   double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
   // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
   // always inside the 0.02 s association window). Both images are rendered at the colour
