@@ -188,6 +188,7 @@ int main(int argc, char** argv) {
   rgbdmap::addSessionCommand(app, selected);
   rgbdmap::addMergeCommand(app, selected);
   rgbdmap::addExportCommand(app, selected);
+  rgbdmap::addCalibrateCommand(app, selected);
   app.require_subcommand(0, 1);
 
   try {

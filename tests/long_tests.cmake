@@ -16,6 +16,9 @@ set(RGBDMAP_LONG_TESTS
   Tracking.Fr1RpyHead100EveryFrame
   # An unregistered walk rendered and mapped three times (30 s; the registration itself stays)
   DepthRegistration.AnUnregisteredWalkMapsAsWellAsARegisteredOneWithItsKeys
+  # An unregistered orbit rendered and calibrated through the command line (13 s; the
+  # calibrator on rendered captures stays)
+  ColorDepthCalibrator.CalibrateFindsTheKeysOfAnUnregisteredSequence
   # Real sequences end to end, and runs repeated to compare them (95-160 s under ThreadSanitizer;
   # PipelineReplay.Fr1XyzEndToEnd stays)
   PipelineReplay.Fr1RpyHead100EndToEnd

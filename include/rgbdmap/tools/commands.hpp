@@ -19,5 +19,6 @@ void addViewCommand(CLI::App& app, Command& selected);       // tools/view.cpp
 void addSessionCommand(CLI::App& app, Command& selected);    // tools/session.cpp
 void addMergeCommand(CLI::App& app, Command& selected);      // tools/merge.cpp
 void addExportCommand(CLI::App& app, Command& selected);     // tools/export.cpp
+void addCalibrateCommand(CLI::App& app, Command& selected);  // tools/calibrate.cpp
 
 }  // namespace rgbdmap

@@ -1,0 +1,74 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "rgbdmap/base/frame.hpp"
+
+namespace rgbdmap {
+
+class WorkerPool;
+
+// One capture as the calibrator needs it: the colour camera's grey image (CV_32FC1, 0..255, an
+// ideal pinhole view) and the depth camera's own depth (CV_32FC1, metres, 0 = none).
+struct CalibrationFrame {
+  cv::Mat gray;
+  cv::Mat depth;
+};
+
+// What the calibration estimates: the colour camera's focal lengths (its principal point stays
+// the declared one: a shift of it and a small turn of the depth camera look the same) and the
+// depth camera's pose in the colour camera's frame.
+struct ColorDepthCalibration {
+  double fx = 525.0, fy = 525.0;
+  Eigen::Isometry3d color_from_depth = Eigen::Isometry3d::Identity();
+};
+
+struct CalibrationReport {
+  ColorDepthCalibration calibration;
+  // Edge points whose colour edge was found, and their RMS distance to it along the edge's
+  // normal (px, full resolution): at the guess and at the estimate.
+  std::size_t edges_before = 0, edges_after = 0;
+  double rms_before = 0.0, rms_after = 0.0;
+  // How well the captures determine the estimate: standard deviations of the depth camera's
+  // position (m) and rotation (rad), and of the focal length (a fraction of it).
+  double translation_sd = 0.0, rotation_sd = 0.0, focal_sd = 0.0;
+};
+
+// Finds the colour camera's focal lengths and the depth camera's pose in it from captures of
+// any scene with objects in front of others. Where depth jumps (an object's outline), the colour
+// changes too: each outline point of the depth image, moved into the colour camera, must land
+// on the colour edge beside it. Each step looks for that edge along the outline's normal (the
+// strongest intensity change within a few pixels) and moves the calibration to close the gaps,
+// by Gauss-Newton with Huber weights, the search narrowing, like ICP on edges. Why
+// outlines rather than the consistency of two captures' colour: docs/cameras.md.
+class ColorDepthCalibrator {
+ public:
+  struct Config {
+    int iterations = 15;        // Gauss-Newton steps per search range, at most
+    double search_px = 8.0;     // how far along the normal to look for the colour edge (px)
+                                // at first; halved down to 2 as the estimate closes in
+    double min_gradient = 4.0;  // a colour edge changes by at least this (grey levels/px)
+    double unique = 0.7;        // and no other in the range by more than this share of it
+    double min_jump = 0.05;     // depth jumps by this (m) plus 5% to make an outline
+    double min_depth = 0.4;     // m
+    double max_depth = 4.0;     // m
+    int max_edges_per_frame = 4000;
+  };
+
+  // `color`: the colour camera's declared intrinsics (its principal point is kept); `depth`:
+  // the depth camera's, taken as exact (with the lens distortion its depth image has, if any).
+  ColorDepthCalibrator(const Config& config, const CameraIntrinsics& color,
+                       const CameraIntrinsics& depth);
+
+  // Throws std::runtime_error when the captures show too few outlines to estimate anything.
+  CalibrationReport estimate(const std::vector<CalibrationFrame>& frames,
+                             const ColorDepthCalibration& guess, WorkerPool& pool) const;
+
+ private:
+  Config config_;
+  CameraIntrinsics color_, depth_;
+};
+
+}  // namespace rgbdmap

@@ -1,0 +1,132 @@
+// rgbdmap calibrate: the colour camera's focal length and the depth camera's pose in it, found
+// from where depth outlines meet colour edges, against the truth of rendered captures.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "rgbdmap/base/worker_pool.hpp"
+#include "rgbdmap/config/config.hpp"
+#include "rgbdmap/sim/synthetic_sequence.hpp"
+#include "rgbdmap/tracking/color_depth_calibrator.hpp"
+#include "test_support.hpp"
+
+namespace rgbdmap {
+namespace {
+
+// The bounds: the extrinsic within 5 mm and 0.3 degrees, the focal length within 0.5%.
+void expectNear(const ColorDepthCalibration& found, const Eigen::Isometry3d& truth, double fx) {
+  const double offset_mm =
+      (found.color_from_depth.translation() - truth.translation()).norm() * 1000.0;
+  const double angle_deg =
+      Eigen::AngleAxisd(found.color_from_depth.linear() * truth.linear().transpose()).angle() *
+      180.0 / M_PI;
+  std::cout << "extrinsic off by " << offset_mm << " mm, " << angle_deg << " deg; fx " << found.fx
+            << ", fy " << found.fy << " (truth " << fx << ")\n";
+  EXPECT_LT(offset_mm, 5.0);
+  EXPECT_LT(angle_deg, 0.3);
+  EXPECT_LT(std::abs(found.fx / fx - 1.0), 0.005);
+  EXPECT_LT(std::abs(found.fy / fx - 1.0), 0.005);
+}
+
+Eigen::Isometry3d depthCamera(const Eigen::Vector3d& position, const Eigen::Vector3d& degrees) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d r = degrees * M_PI / 180.0;
+  pose.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
+  pose.translation() = position;
+  return pose;
+}
+
+TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCaptures) {
+  // A Kinect-like pair: depth 2.5 cm aside with a focal length of 580 px, turned by 0.9 deg;
+  // the colour lens 1% longer than the 525 px declared.
+  const Eigen::Isometry3d truth = depthCamera({0.025, 0.003, -0.002}, {0.3, -0.8, 0.2});
+  CameraIntrinsics color;  // declared: 640 x 480, f 525
+  CameraIntrinsics lens = color;
+  lens.fx = lens.fy = 525.0 * 1.01;
+  CameraIntrinsics depth = color;
+  depth.fx = depth.fy = 580.0;
+  const SyntheticScene scene = SyntheticScene::defaultRoom();
+  const SyntheticRenderer color_renderer(scene, lens), depth_renderer(scene, depth);
+  // Along the walls, where outlines lie at every depth (seen from the room's centre, most are
+  // far, and a longer focal length looks like a depth camera nearer the scene).
+  SyntheticSequenceOptions options;
+  options.path = "walk";
+  const auto path = makeCameraPath(scene, options, options.loop_seconds);
+  std::vector<CalibrationFrame> frames;
+  cv::Mat color_image, incidence, hits, unused, gray8;
+  for (int i = 0; i < 30; ++i) {
+    const Eigen::Isometry3d pose = path->pose(options.loop_seconds * i / 30.0);
+    CalibrationFrame frame;
+    color_renderer.render(pose, unused, color_image, incidence, hits);
+    cv::cvtColor(color_image, gray8, cv::COLOR_BGR2GRAY);
+    gray8.convertTo(frame.gray, CV_32F);
+    depth_renderer.render(pose * truth, frame.depth, unused, incidence, hits);
+    frames.push_back(frame);
+  }
+  WorkerPool pool(2);
+  const ColorDepthCalibrator calibrator(ColorDepthCalibrator::Config{}, color, depth);
+  ColorDepthCalibration guess;  // registered, as declared
+  const CalibrationReport report = calibrator.estimate(frames, guess, pool);
+  std::cout << "outlines " << report.rms_before << " px from their edges (" << report.edges_before
+            << ") at the guess, " << report.rms_after << " px (" << report.edges_after
+            << ") calibrated\n";
+  expectNear(report.calibration, truth, lens.fx);
+  EXPECT_LT(report.rms_after, report.rms_before);
+
+  // Without outlines (a flat wall filling the view) there is nothing to go by: said, not guessed.
+  for (CalibrationFrame& frame : frames) frame.depth.setTo(2.0f);
+  try {
+    calibrator.estimate(frames, guess, pool);
+    ADD_FAILURE() << "calibrated from captures without outlines";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("too few outlines"), std::string::npos) << e.what();
+  }
+}
+
+// Through the command line: a rendered unregistered orbit with sensor noise; the keys printed.
+TEST(ColorDepthCalibrator, CalibrateFindsTheKeysOfAnUnregisteredSequence) {
+  const std::string sequence = test::sharedSynthetic(
+      "orbit_100_unregistered",
+      " --frames 100 --fps 10 --seed 5 --depth-camera -0.02,0.005,0.003,-0.5,0.6,-0.3"
+      " --depth-focal 575 --focal-error -0.012");
+  const std::string dir = test::freshDir();
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " calibrate --source tum:" + sequence +
+                          " --every 1 --set camera.depth_fx=575 --set camera.depth_fy=575 --out " +
+                          dir + "/calibrated.yaml",
+                      &output),
+            0)
+      << output;
+  std::cout << output;
+  EXPECT_EQ(output.find("warning"), std::string::npos) << output;
+  // The keys as printed, set as a user would set them.
+  const std::string marker = "map with:";
+  const auto line = output.find(marker);
+  ASSERT_NE(line, std::string::npos) << output;
+  std::istringstream keys(
+      output.substr(line + marker.size(), output.find('\n', line) - line - marker.size()));
+  Config config;
+  std::string word, assignment;
+  while (keys >> word >> assignment) {
+    ASSERT_EQ(word, "--set");
+    config.setAll({assignment}, "calibrate's output");
+  }
+  const CameraOptions& c = config.camera;
+  ColorDepthCalibration found;
+  found.fx = c.fx;
+  found.fy = c.fy;
+  const Eigen::Vector3d r(c.depth_rx, c.depth_ry, c.depth_rz);
+  found.color_from_depth.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
+  found.color_from_depth.translation() = Eigen::Vector3d(c.depth_x, c.depth_y, c.depth_z);
+  expectNear(found, depthCamera({-0.02, 0.005, 0.003}, {-0.5, 0.6, -0.3}), 525.0 * 0.988);
+  EXPECT_EQ(c.depth_fx, 575.0);
+  EXPECT_EQ(c.depth_fy, 575.0);
+  // The config file holds the same camera.
+  EXPECT_NE(test::readFile(dir + "/calibrated.yaml").find("depth_fx: 575"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rgbdmap

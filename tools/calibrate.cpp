@@ -1,0 +1,181 @@
+// `rgbdmap calibrate --source SRC`: the colour camera's focal lengths and where the depth camera
+// sits in it, for cameras whose depth is not registered to colour (raw Kinect streams,
+// 7-Scenes), found from a recording where objects stand before others; prints the keys to set.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+
+#include "rgbdmap/base/error.hpp"
+#include "rgbdmap/base/steady_time.hpp"
+#include "rgbdmap/base/worker_pool.hpp"
+#include "rgbdmap/capture/lens_undistortion.hpp"
+#include "rgbdmap/config/config.hpp"
+#include "rgbdmap/runtime/source_factory.hpp"
+#include "rgbdmap/tools/commands.hpp"
+#include "rgbdmap/tracking/color_depth_calibrator.hpp"
+
+namespace rgbdmap {
+namespace {
+
+struct CalibrateOptions {
+  std::string source;
+  std::string config_file;
+  std::vector<std::string> sets;
+  std::string out;  // a config file with the calibration, to pass as --config
+  int frames = 60;  // captures to use
+  int every = 5;    // one capture taken every this many frames
+  int threads = 0;
+};
+
+// Every `every`-th capture, up to `frames` of them, as the calibrator takes them: grey colour
+// through an ideal pinhole lens, depth as the depth camera measured it.
+std::vector<CalibrationFrame> readCaptures(FrameSource& source, const CameraIntrinsics& color,
+                                           const CalibrateOptions& o) {
+  std::vector<CalibrationFrame> out;
+  std::unique_ptr<LensUndistortion> lens;
+  if (color.hasDistortion()) lens = std::make_unique<LensUndistortion>(color);
+  Frame frame;
+  std::uint64_t index = 0;
+  int timeouts = 0;
+  cv::Mat gray8, pinhole;
+  while (static_cast<int>(out.size()) < o.frames) {
+    const ReadStatus status = source.read(frame);
+    if (status == ReadStatus::kEnd) break;
+    if (status == ReadStatus::kTimeout && ++timeouts > 5)
+      throw InputError(source.describe() + ": no frames for several seconds");
+    if (status != ReadStatus::kFrame) continue;
+    if (index++ % static_cast<std::uint64_t>(o.every) != 0) continue;
+    if (frame.color.size() != cv::Size(color.width, color.height))
+      throw InputError(frame.origin + ": the colour image is " + std::to_string(frame.color.cols) +
+                       "x" + std::to_string(frame.color.rows) + ", the camera section says " +
+                       std::to_string(color.width) + "x" + std::to_string(color.height));
+    CalibrationFrame capture;
+    cv::cvtColor(frame.color, gray8, cv::COLOR_BGR2GRAY);
+    if (lens) {
+      lens->resampleImage(gray8, pinhole);
+      pinhole.convertTo(capture.gray, CV_32F);
+    } else {
+      gray8.convertTo(capture.gray, CV_32F);
+    }
+    capture.depth = frame.depth.clone();
+    out.push_back(std::move(capture));
+  }
+  return out;
+}
+
+int calibrate(const CalibrateOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  Config config;
+  config.loadPreset(o.config_file.empty() ? presetForSource(o.source) : o.config_file);
+  config.set("replay.rate", "0", "calibrate");  // recordings: every frame
+  config.setAll(o.sets, "--set");
+  std::unique_ptr<FrameSource> source = openSource(o.source, config);
+  const CameraOptions& camera = config.camera;
+  CameraIntrinsics depth = camera;
+  depth.fx = camera.depth_fx > 0 ? camera.depth_fx : camera.fx;
+  depth.fy = camera.depth_fy > 0 ? camera.depth_fy : camera.fy;
+  depth.cx = camera.depth_cx != 0 ? camera.depth_cx : camera.cx;
+  depth.cy = camera.depth_cy != 0 ? camera.depth_cy : camera.cy;
+  // A depth camera of its own is an ideal pinhole, as DepthRegistration takes it; depth
+  // registered to colour (no camera.depth_* keys: a check of a registered camera) shares the
+  // colour lens.
+  if (!camera.depthRegistered()) depth.k1 = depth.k2 = depth.p1 = depth.p2 = depth.k3 = 0;
+
+  const std::vector<CalibrationFrame> captures = readCaptures(*source, camera, o);
+  if (captures.size() < 2)
+    throw InputError(source->describe() + ": " + std::to_string(captures.size()) +
+                     " captures taken; calibrating needs several (a longer recording, or a "
+                     "smaller --every)");
+
+  ColorDepthCalibration guess;
+  guess.fx = camera.fx;
+  guess.fy = camera.fy;
+  const Eigen::Vector3d r(camera.depth_rx, camera.depth_ry, camera.depth_rz);
+  if (r.norm() > 0)
+    guess.color_from_depth.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
+  guess.color_from_depth.translation() =
+      Eigen::Vector3d(camera.depth_x, camera.depth_y, camera.depth_z);
+
+  WorkerPool pool(WorkerPool::resolve(o.threads));
+  ColorDepthCalibrator::Config calibrator_config;
+  calibrator_config.min_depth = config.filter.min_depth;
+  calibrator_config.max_depth = config.filter.max_depth;
+  const ColorDepthCalibrator calibrator(calibrator_config, camera, depth);
+  CalibrationReport report;
+  try {
+    report = calibrator.estimate(captures, guess, pool);
+  } catch (const std::runtime_error& e) {
+    throw InputError(source->describe() + ": cannot calibrate: " + e.what());
+  }
+
+  const ColorDepthCalibration& c = report.calibration;
+  const Eigen::AngleAxisd rotation(c.color_from_depth.linear());
+  const Eigen::Vector3d rv = rotation.angle() * rotation.axis();
+  const Eigen::Vector3d t = c.color_from_depth.translation();
+  std::printf(
+      "%s: %zu captures; depth outlines %.2f px from the colour edges (RMS, %zu matched) with "
+      "the keys given, %.2f px (%zu) calibrated (%.1f s)\n",
+      source->describe().c_str(), captures.size(), report.rms_before, report.edges_before,
+      report.rms_after, report.edges_after, secondsSince(start));
+  std::printf("colour camera: fx %.2f, fy %.2f (given %.2f, %.2f; principal point kept)\n", c.fx,
+              c.fy, camera.fx, camera.fy);
+  std::printf("uncertainty: position %.1f mm, rotation %.3f deg, focal length %.2f%%\n",
+              report.translation_sd * 1000, report.rotation_sd * 180 / M_PI, report.focal_sd * 100);
+  std::printf("depth camera in the colour camera: %.4f %.4f %.4f m, rotation %.3f %.3f %.3f deg\n",
+              t.x(), t.y(), t.z(), rv.x() * 180 / M_PI, rv.y() * 180 / M_PI, rv.z() * 180 / M_PI);
+
+  // The keys, the depth camera's intrinsics included: once camera.fx changes, a depth_fx of 0
+  // (the colour camera's) would follow it.
+  const std::vector<std::pair<std::string, double>> keys = {
+      {"camera.fx", c.fx},           {"camera.fy", c.fy},           {"camera.depth_fx", depth.fx},
+      {"camera.depth_fy", depth.fy}, {"camera.depth_cx", depth.cx}, {"camera.depth_cy", depth.cy},
+      {"camera.depth_x", t.x()},     {"camera.depth_y", t.y()},     {"camera.depth_z", t.z()},
+      {"camera.depth_rx", rv.x()},   {"camera.depth_ry", rv.y()},   {"camera.depth_rz", rv.z()}};
+  std::string sets;
+  for (const auto& [key, value] : keys) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    sets += " --set " + key + "=" + text;
+    config.set(key, text, "calibrate");
+  }
+  std::printf("map with:%s\n", sets.c_str());
+  if (!o.out.empty()) {
+    std::ofstream file(o.out);
+    file << "# rgbdmap calibrate --source " << o.source << "\n" << config.toYaml();
+    file.close();
+    if (!file) throw InputError(o.out + ": cannot write");
+    std::printf("or: --config %s (every key, the camera calibrated)\n", o.out.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void addCalibrateCommand(CLI::App& app, Command& selected) {
+  auto* cmd = app.add_subcommand(
+      "calibrate",
+      "find the colour camera's focal lengths and the depth camera's pose in it (depth not "
+      "registered to colour) from a recording; prints the camera keys to map it with");
+  auto o = std::make_shared<CalibrateOptions>();
+  cmd->add_option("-s,--source", o->source, "tum:DIR | openni2 | openni2:FILE.oni | ...")
+      ->required();
+  cmd->add_option("-c,--config", o->config_file,
+                  "YAML config: a preset name or a file (the guess: camera.fx/fy, the depth "
+                  "camera's camera.depth_* keys)");
+  cmd->add_option("--set", o->sets, "override a config key (repeatable)");
+  cmd->add_option("-o,--out", o->out, "also write a config file with the calibration");
+  cmd->add_option("--frames", o->frames, "captures to use")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 10000));
+  cmd->add_option("--every", o->every, "take one capture every this many frames")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--threads", o->threads, "threads (0: every core)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
+  cmd->callback([o, &selected] { selected = [o] { return calibrate(*o); }; });
+}
+
+}  // namespace rgbdmap
