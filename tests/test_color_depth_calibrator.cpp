@@ -126,6 +126,15 @@ TEST(ColorDepthCalibrator, CalibrateFindsTheKeysOfAnUnregisteredSequence) {
   EXPECT_EQ(c.depth_fy, 575.0);
   // The config file holds the same camera.
   EXPECT_NE(test::readFile(dir + "/calibrated.yaml").find("depth_fx: 575"), std::string::npos);
+
+  // Told the depth camera's offset along the view, it keeps it and finds the rest.
+  ASSERT_EQ(test::run(test::binary() + " calibrate --source tum:" + sequence +
+                          " --every 1 --fix-depth-z --set camera.depth_fx=575 --set "
+                          "camera.depth_fy=575 --set camera.depth_z=0.003",
+                      &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("--set camera.depth_z=0.003 "), std::string::npos) << output;
 }
 
 }  // namespace

@@ -211,11 +211,21 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
                                  " found): film objects in front of others, within " +
                                  std::to_string(config_.max_depth) + " m");
       system.H.diagonal() *= 1.0 + 1e-6;
+      if (!config_.estimate_depth_z) {
+        // No move of the depth camera along the colour camera's view (what a turn adds to it
+        // through the left increment is taken back after the step).
+        system.H.row(2).setZero();
+        system.H.col(2).setZero();
+        system.H(2, 2) = 1.0;
+        system.b(2) = 0.0;
+      }
       const Vector7 step = -system.H.ldlt().solve(system.b);
       if (!step.allFinite()) throw std::runtime_error("the estimate diverged");
       current.color_from_depth = exp6(step.head<6>()) * current.color_from_depth;
       current.fx *= std::exp(step(6));
       current.fy *= std::exp(step(6));
+      if (!config_.estimate_depth_z)
+        current.color_from_depth.translation().z() = guess.color_from_depth.translation().z();
       // Far from any camera's: matched to texture rather than outlines, not a calibration.
       const Eigen::Isometry3d moved = guess.color_from_depth.inverse() * current.color_from_depth;
       if (std::abs(std::log(current.fx / guess.fx)) > 0.2 || moved.translation().norm() > 0.1 ||

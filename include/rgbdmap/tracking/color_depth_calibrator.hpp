@@ -17,9 +17,10 @@ struct CalibrationFrame {
   cv::Mat depth;
 };
 
-// What the calibration estimates: the colour camera's focal lengths (its principal point stays
-// the declared one: a shift of it and a small turn of the depth camera look the same) and the
-// depth camera's pose in the colour camera's frame.
+// What the calibration estimates: the colour camera's focal lengths (scaled together, their
+// declared ratio kept; its principal point stays the declared one: a shift of it and a small
+// turn of the depth camera look the same) and the depth camera's pose in the colour camera's
+// frame.
 struct ColorDepthCalibration {
   double fx = 525.0, fy = 525.0;
   Eigen::Isometry3d color_from_depth = Eigen::Isometry3d::Identity();
@@ -36,7 +37,7 @@ struct CalibrationReport {
   double translation_sd = 0.0, rotation_sd = 0.0, focal_sd = 0.0;
 };
 
-// Finds the colour camera's focal lengths and the depth camera's pose in it from captures of
+// Finds the colour camera's focal length and the depth camera's pose in it from captures of
 // any scene with objects in front of others. Where depth jumps (an object's outline), the colour
 // changes too: each outline point of the depth image, moved into the colour camera, must land
 // on the colour edge beside it. Each step looks for that edge along the outline's normal (the
@@ -55,6 +56,9 @@ class ColorDepthCalibrator {
     double min_depth = 0.4;     // m
     double max_depth = 4.0;     // m
     int max_edges_per_frame = 4000;
+    // Whether the depth camera's offset along the view is estimated or kept at the guess's: on
+    // real recordings the outlines trade it against the focal length (docs/cameras.md).
+    bool estimate_depth_z = true;
   };
 
   // `color`: the colour camera's declared intrinsics (its principal point is kept); `depth`:
