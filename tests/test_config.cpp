@@ -71,10 +71,17 @@ TEST(Config, YamlErrorsNameFileAndLine) {
 }
 
 TEST(Config, PresetsLoadAndEffectiveConfigRoundTrips) {
-  for (const char* preset : {"default", "tum_fr1", "tum_fr2", "tum_fr3"}) {
+  for (const char* preset :
+       {"default", "tum_fr1", "tum_fr2", "tum_fr3", "kinect_v1", "xtion", "kinect_v1_raw"}) {
     Config c;
     EXPECT_NO_THROW(c.loadPreset(preset)) << preset;
   }
+  // A camera whose depth is not registered to colour: its depth camera's own intrinsics.
+  Config seven_scenes;
+  seven_scenes.loadPreset("seven_scenes");
+  EXPECT_FALSE(seven_scenes.camera.depthRegistered());
+  EXPECT_DOUBLE_EQ(seven_scenes.camera.depth_fx, 585.0);
+  EXPECT_DOUBLE_EQ(seven_scenes.camera.depth_scale, 1000.0);
   Config fr1;
   fr1.loadPreset("tum_fr1");
   EXPECT_DOUBLE_EQ(fr1.camera.fx, 517.3);

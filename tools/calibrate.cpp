@@ -135,6 +135,15 @@ int calibrate(const CalibrateOptions& o) {
                  "others (chairs, shelves, door frames) from nearer and from more sides, or take "
                  "more captures (--frames, --every)\n",
                  source->describe().c_str());
+  // Kinect-class cameras hold their lenses centimetres apart and parallel to a degree: more
+  // says the depth camera's intrinsics are not its own (or the depth is registered already).
+  if (t.norm() > 0.05 || rotation.angle() > 2.0 * M_PI / 180)
+    std::fprintf(stderr,
+                 "warning: a depth camera %.1f cm and %.1f deg from the colour one is not a "
+                 "Kinect-class camera's: check its intrinsics (camera.depth_fx/fy/cx/cy: %g, %g, "
+                 "%g, %g), or whether %s's depth is registered to colour already\n",
+                 t.norm() * 100, rotation.angle() * 180 / M_PI, depth.fx, depth.fy, depth.cx,
+                 depth.cy, source->describe().c_str());
   if (!o.fix_depth_z && std::abs(t.z() - camera.depth_z) > 0.01)
     std::fprintf(stderr,
                  "warning: the depth camera came out %.1f cm along the view from camera.depth_z: "
