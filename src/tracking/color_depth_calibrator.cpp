@@ -28,7 +28,7 @@ struct Outline {
 constexpr int kMaxSamples = 129;  // of one search: +-32 px every half pixel
 
 // A colour image's intensity gradient.
-struct LevelGradient {
+struct ColorGradient {
   cv::Mat gx, gy;  // CV_32FC1
 };
 
@@ -36,11 +36,11 @@ struct LevelGradient {
 struct FrameSystem {
   Matrix7 H = Matrix7::Zero();
   Vector7 b = Vector7::Zero();
-  double squares = 0.0;  // of the gaps, level pixels
+  double squares = 0.0;  // of the gaps, pixels
   std::size_t count = 0;
 };
 
-bool bilinear(const LevelGradient& image, float u, float v, float& gx, float& gy) {
+bool bilinear(const ColorGradient& image, float u, float v, float& gx, float& gy) {
   if (!(u >= 0.0f && v >= 0.0f && u < image.gx.cols - 1.0f && v < image.gx.rows - 1.0f))
     return false;
   const int x = static_cast<int>(u), y = static_cast<int>(v);
@@ -106,13 +106,16 @@ Eigen::Isometry3d exp6(const Eigen::Matrix<double, 6, 1>& xi) {
 
 ColorDepthCalibrator::ColorDepthCalibrator(const Config& config, const CameraIntrinsics& color,
                                            const CameraIntrinsics& depth)
-    : config_(config), color_(color), depth_(depth) {}
+    : config_(config), color_(color), depth_(depth) {
+  if (!(config.search_px >= 2.0 && 2 * config.search_px / 0.5 + 1 <= kMaxSamples))
+    throw std::invalid_argument("ColorDepthCalibrator: search_px must be within 2-32 px");
+}
 
 CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFrame>& frames,
                                                  const ColorDepthCalibration& guess,
                                                  WorkerPool& pool) const {
   std::vector<std::vector<Outline>> edges(frames.size());
-  std::vector<LevelGradient> gradients(frames.size());
+  std::vector<ColorGradient> gradients(frames.size());
   auto prepare = [&](std::size_t f) {
     edges[f] = outlines(frames[f].depth, depth_, config_);
     cv::Sobel(frames[f].gray, gradients[f].gx, CV_32F, 1, 0, 1, 0.5);
@@ -121,7 +124,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
   pool.run(frames.size(), prepare);
 
   std::vector<FrameSystem> systems(frames.size());
-  // Matches every outline at `level` against the colour edges of its frame and fills systems.
+  // Matches every outline against the colour edges of its frame within `search_px`.
   auto match = [&](const ColorDepthCalibration& x, double search_px) {
     const double fx = x.fx, fy = x.fy, cx = color_.cx, cy = color_.cy;
     const Eigen::Matrix3f R = x.color_from_depth.linear().cast<float>();
@@ -131,7 +134,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
     const float unique = static_cast<float>(config_.unique);
     auto body = [&](std::size_t f) {
       FrameSystem system;
-      const LevelGradient& image = gradients[f];
+      const ColorGradient& image = gradients[f];
       for (const Outline& outline : edges[f]) {
         const Eigen::Vector3f p = R * outline.point + t;
         const Eigen::Vector3f q = R * outline.beyond + t;
@@ -147,7 +150,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
         const float step = 0.5f;
         const int samples = 2 * static_cast<int>(search / step) + 1;
         float change[kMaxSamples];
-        bool inside = samples <= kMaxSamples;
+        bool inside = true;
         int best = 0;
         for (int i = 0; i < samples && inside; ++i) {
           float gx = 0.0f, gy = 0.0f;
