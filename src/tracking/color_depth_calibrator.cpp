@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
+#include <string>
 
 #include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/capture/lens_undistortion.hpp"
@@ -38,6 +40,7 @@ struct FrameSystem {
   Vector7 b = Vector7::Zero();
   double squares = 0.0;  // of the gaps, pixels
   std::size_t count = 0;
+  std::size_t close = 0;  // gaps under a pixel
 };
 
 bool bilinear(const ColorGradient& image, float u, float v, float& gx, float& gy) {
@@ -188,6 +191,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
         system.b += w * gap * J;
         system.squares += gap * gap;
         ++system.count;
+        if (std::abs(gap) < 1.0) ++system.close;
       }
       systems[f] = system;
     };
@@ -198,60 +202,98 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
       total.b += s.b;
       total.squares += s.squares;
       total.count += s.count;
+      total.close += s.close;
     }
     return total;
   };
 
-  // Full resolution only (halved images put the outlines off their edges: the blur mixes an
-  // object with what lies behind it), the search narrowed instead as the estimate closes in.
-  ColorDepthCalibration current = guess;
-  for (double search = config_.search_px; search >= 1.99; search /= 2) {
-    for (int iteration = 0; iteration < config_.iterations; ++iteration) {
-      FrameSystem system = match(current, search);
-      if (system.count < 100)
-        throw std::runtime_error("too few outlines of objects against their background (" +
-                                 std::to_string(system.count) +
-                                 " found): film objects in front of others, within " +
-                                 std::to_string(config_.max_depth) + " m");
-      system.H.diagonal() *= 1.0 + 1e-6;
-      if (!config_.estimate_depth_z) {
-        // No move of the depth camera along the colour camera's view (what a turn adds to it
-        // through the left increment is taken back after the step).
-        system.H.row(2).setZero();
-        system.H.col(2).setZero();
-        system.H(2, 2) = 1.0;
-        system.b(2) = 0.0;
+  // Gauss-Newton from `start`, at full resolution only (halved images put the outlines off
+  // their edges: the blur mixes an object with what lies behind it), the search narrowed instead
+  // as the estimate closes in.
+  auto refine = [&](ColorDepthCalibration current) {
+    for (double search = config_.search_px; search >= 1.99; search /= 2) {
+      for (int iteration = 0; iteration < config_.iterations; ++iteration) {
+        FrameSystem system = match(current, search);
+        if (system.count < 100)
+          throw std::runtime_error("too few outlines of objects against their background (" +
+                                   std::to_string(system.count) +
+                                   " found): film objects in front of others, within " +
+                                   std::to_string(config_.max_depth) + " m");
+        system.H.diagonal() *= 1.0 + 1e-6;
+        if (!config_.estimate_depth_z) {
+          // No move of the depth camera along the colour camera's view (what a turn adds to it
+          // through the left increment is taken back after the step).
+          system.H.row(2).setZero();
+          system.H.col(2).setZero();
+          system.H(2, 2) = 1.0;
+          system.b(2) = 0.0;
+        }
+        const Vector7 step = -system.H.ldlt().solve(system.b);
+        if (!step.allFinite()) throw std::runtime_error("the estimate diverged");
+        current.color_from_depth = exp6(step.head<6>()) * current.color_from_depth;
+        current.fx *= std::exp(step(6));
+        current.fy *= std::exp(step(6));
+        if (!config_.estimate_depth_z)
+          current.color_from_depth.translation().z() = guess.color_from_depth.translation().z();
+        // Far from any camera's: matched to texture rather than outlines, not a calibration.
+        const Eigen::Isometry3d moved = guess.color_from_depth.inverse() * current.color_from_depth;
+        if (std::abs(std::log(current.fx / guess.fx)) > 0.2 || moved.translation().norm() > 0.1 ||
+            Eigen::AngleAxisd(moved.linear()).angle() > 10.0 * M_PI / 180.0)
+          throw std::runtime_error(
+              "the estimate ran off (focal length " + std::to_string(current.fx) +
+              " px, depth camera " + std::to_string(moved.translation().norm() * 1000.0) +
+              " mm from the guess) on " + std::to_string(system.count) +
+              " outline points: film objects standing before others from nearer and from more "
+              "sides, or give a guess nearer the truth (camera.depth_* keys)");
+        if (step.head<3>().norm() < 1e-5 && step.segment<3>(3).norm() < 1e-5 &&
+            std::abs(step(6)) < 1e-5)
+          break;
       }
-      const Vector7 step = -system.H.ldlt().solve(system.b);
-      if (!step.allFinite()) throw std::runtime_error("the estimate diverged");
-      current.color_from_depth = exp6(step.head<6>()) * current.color_from_depth;
-      current.fx *= std::exp(step(6));
-      current.fy *= std::exp(step(6));
-      if (!config_.estimate_depth_z)
-        current.color_from_depth.translation().z() = guess.color_from_depth.translation().z();
-      // Far from any camera's: matched to texture rather than outlines, not a calibration.
-      const Eigen::Isometry3d moved = guess.color_from_depth.inverse() * current.color_from_depth;
-      if (std::abs(std::log(current.fx / guess.fx)) > 0.2 || moved.translation().norm() > 0.1 ||
-          Eigen::AngleAxisd(moved.linear()).angle() > 10.0 * M_PI / 180.0)
-        throw std::runtime_error(
-            "the estimate ran off (focal length " + std::to_string(current.fx) +
-            " px, depth camera " + std::to_string(moved.translation().norm() * 1000.0) +
-            " mm from the guess) on " + std::to_string(system.count) +
-            " outline points: film objects standing before others from nearer and from more "
-            "sides, or give a guess nearer the truth (camera.depth_* keys)");
-      if (step.head<3>().norm() < 1e-5 && step.segment<3>(3).norm() < 1e-5 &&
-          std::abs(step(6)) < 1e-5)
-        break;
+    }
+    return current;
+  };
+
+  // From the guess, and from the depth camera moved across the view by up to the baseline's own
+  // size (a guess of "registered" for lenses 2.5 cm apart puts outlines 10 px and more off their
+  // edges, out of the search's reach: on a rendered floor it converged elsewhere), the start that
+  // brings most outlines within a pixel of an edge. Of the two ends, the one that does.
+  ColorDepthCalibration beside = guess;
+  std::size_t most_close = match(guess, config_.search_px / 2).close;
+  for (double dx = -config_.start_offset_m; dx <= config_.start_offset_m + 1e-9;
+       dx += config_.start_step_m) {
+    ColorDepthCalibration start = guess;
+    start.color_from_depth.translation() += Eigen::Vector3d(dx, 0.0, 0.0);
+    const std::size_t close = match(start, config_.search_px / 2).close;
+    if (close > most_close) {
+      most_close = close;
+      beside = start;
     }
   }
+  std::optional<ColorDepthCalibration> current;
+  std::string failure;
+  std::size_t current_close = 0;
+  for (const ColorDepthCalibration& start : {guess, beside}) {
+    try {
+      const ColorDepthCalibration end = refine(start);
+      const std::size_t close = match(end, 2.0).close;
+      if (!current || close > current_close) {
+        current = end;
+        current_close = close;
+      }
+    } catch (const std::runtime_error& e) {
+      if (failure.empty()) failure = e.what();
+    }
+    if (beside.color_from_depth.isApprox(guess.color_from_depth)) break;
+  }
+  if (!current) throw std::runtime_error(failure);
 
   CalibrationReport report;
-  report.calibration = current;
+  report.calibration = *current;
   const double final_search = 2.0;
   const FrameSystem at_guess = match(guess, final_search);
   report.edges_before = at_guess.count;
   report.rms_before = std::sqrt(at_guess.squares / std::max<std::size_t>(1, at_guess.count));
-  const FrameSystem at_estimate = match(current, final_search);
+  const FrameSystem at_estimate = match(*current, final_search);
   report.edges_after = at_estimate.count;
   report.rms_after = std::sqrt(at_estimate.squares / std::max<std::size_t>(1, at_estimate.count));
   // Standard deviations as if the gaps were independent (neighbouring outline points are not,

@@ -56,6 +56,10 @@ class ColorDepthCalibrator {
     double min_depth = 0.4;     // m
     double max_depth = 4.0;     // m
     int max_edges_per_frame = 4000;
+    // Starts tried beside the guess: the depth camera moved across the view by up to this (half
+    // of it up and down), in steps of start_step_m.
+    double start_offset_m = 0.03;
+    double start_step_m = 0.005;
     // Whether the depth camera's offset along the view is estimated or kept at the guess's: on
     // real recordings the outlines trade it against the focal length (docs/cameras.md).
     bool estimate_depth_z = true;
