@@ -193,7 +193,7 @@ void addCalibrateCommand(CLI::App& app, Command& selected) {
   cmd->add_option("-o,--out", o->out, "also write a config file with the calibration");
   cmd->add_option("--frames", o->frames, "captures to use")
       ->capture_default_str()
-      ->check(CLI::Range(2, 10000));
+      ->check(CLI::Range(2, 500));  // each keeps 2.4 MB (grey and depth as floats)
   cmd->add_option("--every", o->every, "take one capture every this many frames")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
