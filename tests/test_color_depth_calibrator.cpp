@@ -130,9 +130,7 @@ TEST(ColorDepthCalibrator, CalibrateFindsTheKeysOfAnUnregisteredSequence) {
   ColorDepthCalibration found;
   found.fx = c.fx;
   found.fy = c.fy;
-  const Eigen::Vector3d r(c.depth_rx, c.depth_ry, c.depth_rz);
-  found.color_from_depth.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
-  found.color_from_depth.translation() = Eigen::Vector3d(c.depth_x, c.depth_y, c.depth_z);
+  found.color_from_depth = c.colorFromDepth();
   expectNear(found, depthCamera({-0.02, 0.005, 0.003}, {-0.5, 0.6, -0.3}), 525.0 * 0.988);
   EXPECT_EQ(c.depth_fx, 575.0);
   EXPECT_EQ(c.depth_fy, 575.0);

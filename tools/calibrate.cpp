@@ -74,15 +74,9 @@ int calibrate(const CalibrateOptions& o) {
   config.setAll(o.sets, "--set");
   std::unique_ptr<FrameSource> source = openSource(o.source, config);
   const CameraOptions& camera = config.camera;
-  CameraIntrinsics depth = camera;
-  depth.fx = camera.depth_fx > 0 ? camera.depth_fx : camera.fx;
-  depth.fy = camera.depth_fy > 0 ? camera.depth_fy : camera.fy;
-  depth.cx = camera.depth_cx != 0 ? camera.depth_cx : camera.cx;
-  depth.cy = camera.depth_cy != 0 ? camera.depth_cy : camera.cy;
-  // A depth camera of its own is an ideal pinhole, as DepthRegistration takes it; depth
-  // registered to colour (no camera.depth_* keys: a check of a registered camera) shares the
-  // colour lens.
-  if (!camera.depthRegistered()) depth.k1 = depth.k2 = depth.p1 = depth.p2 = depth.k3 = 0;
+  // Registered depth (no camera.depth_* keys: a check of a registered camera) shares the colour
+  // lens; a depth camera of its own is an ideal pinhole, as DepthRegistration takes it.
+  const CameraIntrinsics depth = camera.depthCamera();
 
   const std::vector<CalibrationFrame> captures = readCaptures(*source, camera, o);
   if (captures.size() < 2)
@@ -93,11 +87,7 @@ int calibrate(const CalibrateOptions& o) {
   ColorDepthCalibration guess;
   guess.fx = camera.fx;
   guess.fy = camera.fy;
-  const Eigen::Vector3d r(camera.depth_rx, camera.depth_ry, camera.depth_rz);
-  if (r.norm() > 0)
-    guess.color_from_depth.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
-  guess.color_from_depth.translation() =
-      Eigen::Vector3d(camera.depth_x, camera.depth_y, camera.depth_z);
+  guess.color_from_depth = camera.colorFromDepth();
 
   WorkerPool pool(WorkerPool::resolve(o.threads));
   ColorDepthCalibrator::Config calibrator_config;

@@ -2,6 +2,24 @@
 
 namespace rgbdmap {
 
+CameraIntrinsics CameraOptions::depthCamera() const {
+  CameraIntrinsics depth = *this;
+  depth.fx = depth_fx > 0 ? depth_fx : fx;
+  depth.fy = depth_fy > 0 ? depth_fy : fy;
+  depth.cx = depth_cx != 0 ? depth_cx : cx;
+  depth.cy = depth_cy != 0 ? depth_cy : cy;
+  if (!depthRegistered()) depth.k1 = depth.k2 = depth.p1 = depth.p2 = depth.k3 = 0;
+  return depth;
+}
+
+Eigen::Isometry3d CameraOptions::colorFromDepth() const {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d r(depth_rx, depth_ry, depth_rz);
+  if (r.norm() > 0) pose.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
+  pose.translation() = Eigen::Vector3d(depth_x, depth_y, depth_z);
+  return pose;
+}
+
 Keys cameraKeys(CameraOptions& o) {
   constexpr double kBig = 1e6;
   return {

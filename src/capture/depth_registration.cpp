@@ -7,16 +7,7 @@
 namespace rgbdmap {
 
 DepthRegistration::DepthRegistration(const CameraOptions& camera)
-    : color_(camera),
-      fx_(camera.depth_fx > 0 ? camera.depth_fx : camera.fx),
-      fy_(camera.depth_fy > 0 ? camera.depth_fy : camera.fy),
-      cx_(camera.depth_cx != 0 ? camera.depth_cx : camera.cx),
-      cy_(camera.depth_cy != 0 ? camera.depth_cy : camera.cy) {
-  const Eigen::Vector3d r(camera.depth_rx, camera.depth_ry, camera.depth_rz);
-  if (r.norm() > 0)
-    color_from_depth_.linear() = Eigen::AngleAxisd(r.norm(), r.normalized()).matrix();
-  color_from_depth_.translation() = Eigen::Vector3d(camera.depth_x, camera.depth_y, camera.depth_z);
-}
+    : color_(camera), depth_(camera.depthCamera()), color_from_depth_(camera.colorFromDepth()) {}
 
 void DepthRegistration::apply(cv::Mat& depth) {
   const int w = depth.cols, h = depth.rows;
@@ -24,8 +15,9 @@ void DepthRegistration::apply(cv::Mat& depth) {
     rays_.resize(static_cast<std::size_t>(w) * h);
     for (int v = 0; v < h; ++v)
       for (int u = 0; u < w; ++u)
-        rays_[static_cast<std::size_t>(v) * w + u] = {static_cast<float>((u - cx_) / fx_),
-                                                      static_cast<float>((v - cy_) / fy_)};
+        rays_[static_cast<std::size_t>(v) * w + u] = {
+            static_cast<float>((u - depth_.cx) / depth_.fx),
+            static_cast<float>((v - depth_.cy) / depth_.fy)};
   }
   // A new image each time: the frame's own may still be shared (a keyframe kept, a source's cache).
   cv::Mat registered(color_.height, color_.width, CV_32FC1, cv::Scalar(0.0f));

@@ -25,6 +25,12 @@ struct CameraOptions : CameraIntrinsics {
     return depth_fx == 0 && depth_fy == 0 && depth_cx == 0 && depth_cy == 0 && depth_x == 0 &&
            depth_y == 0 && depth_z == 0 && depth_rx == 0 && depth_ry == 0 && depth_rz == 0;
   }
+  // The depth camera's intrinsics: its own where the keys give them, the colour camera's
+  // otherwise. A depth camera of its own is an ideal pinhole; registered depth shares the colour
+  // lens.
+  CameraIntrinsics depthCamera() const;
+  // The depth camera's pose in the colour camera's frame (identity when registered).
+  Eigen::Isometry3d colorFromDepth() const;
 };
 
 Keys cameraKeys(CameraOptions& o);

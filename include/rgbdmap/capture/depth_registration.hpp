@@ -25,8 +25,8 @@ class DepthRegistration {
 
  private:
   CameraIntrinsics color_;
-  double fx_, fy_, cx_, cy_;  // the depth camera's
-  Eigen::Isometry3d color_from_depth_ = Eigen::Isometry3d::Identity();
+  CameraIntrinsics depth_;
+  Eigen::Isometry3d color_from_depth_;
   std::vector<Eigen::Vector2f> rays_;  // per depth pixel: (x/z, y/z) in the depth camera
 };
 
