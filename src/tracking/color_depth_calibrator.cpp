@@ -9,6 +9,7 @@
 
 #include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/capture/lens_undistortion.hpp"
+#include "rgbdmap/tracking/twist.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -97,14 +98,6 @@ std::vector<Outline> outlines(const cv::Mat& depth, const CameraIntrinsics& came
   return out;
 }
 
-Eigen::Isometry3d exp6(const Eigen::Matrix<double, 6, 1>& xi) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d w = xi.tail<3>();
-  if (w.norm() > 0) T.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
-  T.translation() = xi.head<3>();
-  return T;
-}
-
 }  // namespace
 
 ColorDepthCalibrator::ColorDepthCalibrator(const Config& config, const CameraIntrinsics& color,
@@ -148,7 +141,6 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
                                      static_cast<float>(fy * q.y() / q.z() + cy));
         if ((beyond - u).norm() < 1e-3f) continue;
         const Eigen::Vector2f n = (beyond - u).normalized();
-        // The strongest intensity change across the outline within the search range.
         // The intensity change across the outline at each half pixel of the search range.
         const float step = 0.5f;
         const int samples = 2 * static_cast<int>(search / step) + 1;
@@ -230,7 +222,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
         }
         const Vector7 step = -system.H.ldlt().solve(system.b);
         if (!step.allFinite()) throw std::runtime_error("the estimate diverged");
-        current.color_from_depth = exp6(step.head<6>()) * current.color_from_depth;
+        current.color_from_depth = expSE3(step.head<6>()) * current.color_from_depth;
         current.fx *= std::exp(step(6));
         current.fy *= std::exp(step(6));
         if (!config_.estimate_depth_z)
@@ -269,16 +261,18 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
       beside = start;
     }
   }
+  // Each end judged, and reported, by its matches within the last search range.
+  const double final_search = 2.0;
   std::optional<ColorDepthCalibration> current;
+  FrameSystem at_estimate;
   std::string failure;
-  std::size_t current_close = 0;
   for (const ColorDepthCalibration& start : {guess, beside}) {
     try {
       const ColorDepthCalibration end = refine(start);
-      const std::size_t close = match(end, 2.0).close;
-      if (!current || close > current_close) {
+      const FrameSystem matched = match(end, final_search);
+      if (!current || matched.close > at_estimate.close) {
         current = end;
-        current_close = close;
+        at_estimate = matched;
       }
     } catch (const std::runtime_error& e) {
       if (failure.empty()) failure = e.what();
@@ -289,11 +283,9 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
 
   CalibrationReport report;
   report.calibration = *current;
-  const double final_search = 2.0;
   const FrameSystem at_guess = match(guess, final_search);
   report.edges_before = at_guess.count;
   report.rms_before = std::sqrt(at_guess.squares / std::max<std::size_t>(1, at_guess.count));
-  const FrameSystem at_estimate = match(*current, final_search);
   report.edges_after = at_estimate.count;
   report.rms_after = std::sqrt(at_estimate.squares / std::max<std::size_t>(1, at_estimate.count));
   // Standard deviations as if the gaps were independent (neighbouring outline points are not,

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdmap/tracking/twist.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -26,27 +28,6 @@ Vector6f jacobianRow(const Eigen::Vector3f& p, float gx, float gy, float gz) {
   Vector6f j;
   j << gx, gy, gz, p.y() * gz - p.z() * gy, p.z() * gx - p.x() * gz, p.x() * gy - p.y() * gx;
   return j;
-}
-
-// exp of a twist (v, w) as a rigid motion.
-Eigen::Isometry3d expSE3(const Vector6d& xi) {
-  const Eigen::Vector3d v = xi.head<3>(), w = xi.tail<3>();
-  const double theta = w.norm();
-  Eigen::Matrix3d wx;
-  wx << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
-  Eigen::Matrix3d V = Eigen::Matrix3d::Identity();
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  if (theta > 1e-10) {
-    R = Eigen::AngleAxisd(theta, w / theta).toRotationMatrix();
-    V += (1 - std::cos(theta)) / (theta * theta) * wx +
-         (theta - std::sin(theta)) / (theta * theta * theta) * wx * wx;
-  } else {
-    R += wx;
-  }
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = V * v;
-  return T;
 }
 
 // Robust spread (1.4826 * median absolute value) of every 4th value, which is plenty.
