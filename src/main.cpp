@@ -1,5 +1,6 @@
 // rgbdmap: map a room with an RGB-D camera (or a TUM sequence replayed as one)
 // into a coloured point cloud, checkpointed while it runs.
+#include <spdlog/cfg/env.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -137,6 +138,8 @@ int main(int argc, char** argv) {
   rgbdmap::tuneAllocator();
   // spdlog creates its registry on first use: do it here, before any thread can log.
   spdlog::default_logger_raw();
+  // SPDLOG_LEVEL=debug shows why loops and window alignments were or were not taken.
+  spdlog::cfg::load_env_levels();
   rgbdmap::RunControl control;
   auto signals = std::make_unique<rgbdmap::RunSignals>(control);
   CLI::App app{"rgbdmap: real-time RGB-D dense mapping to a coloured point cloud (PCD)"};

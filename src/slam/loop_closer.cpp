@@ -32,7 +32,8 @@ LoopCloser::LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tr
       corrections_(corrections),
       stats_(stats),
       lossless_(lossless),
-      places_(camera, tracking, loop, min_depth, max_depth) {
+      places_(camera, tracking, loop, min_depth, max_depth),
+      window_(camera, tracking, loop, min_depth, max_depth) {
   if (continued) restore(*continued);
   thread_ = std::thread([this] { run(); });
 }
@@ -45,7 +46,9 @@ void LoopCloser::restore(const Saved& saved) {
   std::vector<const PoseGraph::Edge*> odometry(n, nullptr);
   for (const PoseGraph::Edge& e : saved.edges) {
     graph_.addEdge(e);
-    if (!e.loop && e.from < e.to) odometry[static_cast<std::size_t>(e.to)] = &e;
+    // The first is the tracker's; window edges from further back come after it.
+    if (!e.loop && e.from < e.to && !odometry[static_cast<std::size_t>(e.to)])
+      odometry[static_cast<std::size_t>(e.to)] = &e;
   }
   for (std::size_t i = 0; i < n; ++i) {
     Node node;
@@ -197,6 +200,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   graph_lock.unlock();
 
   places_.add(keyframe);
+  tighten(window_.add(keyframe, [this](int k) { return graph_.pose(k); }));
   keyframe.color.release();
   keyframe.depth.release();
   std::vector<LoopMeasurement> accepted;
@@ -335,6 +339,25 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
       last.later, later.timestamp, last.earlier, earlier.timestamp,
       later.timestamp - earlier.timestamp, 100.0 * moved.translation().norm(),
       angle(moved) * kDegreesPerRadian, graph_.size() - first_free, summary.seconds * 1e3);
+}
+
+void LoopCloser::tighten(const std::vector<LoopMeasurement>& local) {
+  if (local.empty()) return;
+  const int first_free =
+      std::max(graph_.size() - options_.window_optimise, joined() ? 0 : first_own_);
+  std::lock_guard<std::mutex> graph_lock(graph_mutex_);
+  const PoseGraph::Checkpoint before = graph_.checkpoint(first_free);
+  for (const LoopMeasurement& m : local) {
+    const Eigen::Isometry3d change =
+        (graph_.pose(m.earlier).inverse() * graph_.pose(m.later)).inverse() * m.later_in_earlier;
+    spdlog::debug("window: keyframe {} -> {}: {:.1f} mm, {:.2f} deg from the graph, overlap {:.2f}",
+                  m.later, m.earlier, 1000.0 * change.translation().norm(),
+                  angle(change) * kDegreesPerRadian, m.overlap);
+    graph_.addEdge(edgeOf(m.earlier, m.later, m.later_in_earlier, m.information, false));
+  }
+  const PoseGraph::Summary summary = graph_.optimise(20, first_free);
+  stats_.optimise_latency.record(summary.seconds);
+  if (!summary.usable) graph_.rollBack(before);
 }
 
 void LoopCloser::publish() {

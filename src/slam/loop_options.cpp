@@ -48,6 +48,17 @@ Keys loopKeys(LoopOptions& o) {
       integer("loop.optimise_window", &o.optimise_window, 1, 100000000,
               "a loop optimises the keyframes since the last loop and this many more (and at "
               "least this many newest); older ones stay put"),
+      integer("loop.window_keyframes", &o.window_keyframes, 0, 100,
+              "each new keyframe is aligned to this many keyframes before it too (0: only to the "
+              "one it was tracked against)"),
+      integer("loop.window_optimise", &o.window_optimise, 2, 100000,
+              "keyframes optimised after a new keyframe's window alignments"),
+      number("loop.window_min_overlap", &o.window_min_overlap, 0, 1,
+             "share of the earlier keyframe's pixels a window alignment must see"),
+      number("loop.window_max_change_translation", &o.window_max_change_translation, 0, 10,
+             "a window alignment may move the pair this far from the graph's estimate (m)"),
+      number("loop.window_max_change_rotation", &o.window_max_change_rotation, 0, 3.15,
+             "a window alignment may turn the pair this far from the graph's estimate (rad)"),
       number("loop.edge_pixels", &o.edge_pixels, 0.001, 1e9,
              "independent pixels an alignment is worth (scales every edge's information)"),
   };

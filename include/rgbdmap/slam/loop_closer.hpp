@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/slam/keyframe_window.hpp"
 #include "rgbdmap/slam/place_recognition.hpp"
 #include "rgbdmap/slam/pose_graph.hpp"
 #include "rgbdmap/tracking/keyframe_sink.hpp"
@@ -120,6 +121,8 @@ class LoopCloser : public KeyframeSink {
   bool plausible(const LoopMeasurement& loop) const;
   bool agree(const LoopMeasurement& a, const LoopMeasurement& b) const;
   void close(const std::vector<LoopMeasurement>& loops);
+  // The newest keyframe's window alignments as edges, and the newest keyframes optimised.
+  void tighten(const std::vector<LoopMeasurement>& local);
   void publish();
   PoseGraph::Edge edgeOf(int from, int to, const Eigen::Isometry3d& measurement,
                          const Eigen::Matrix<double, 6, 6>& information, bool loop) const;
@@ -129,6 +132,7 @@ class LoopCloser : public KeyframeSink {
   RunStats& stats_;
   bool lossless_;
   PlaceRecognition places_;
+  KeyframeWindow window_;
   // Changed on the loop thread only, under `graph_mutex_` so that readGraph() sees them whole.
   PoseGraph graph_;
   std::vector<Node> nodes_;

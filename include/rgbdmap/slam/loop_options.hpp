@@ -50,6 +50,17 @@ struct LoopOptions {
   // optimising every keyframe of an hour's patrol each time would grow without bound.
   int optimise_window = 300;
 
+  // The local window: each new keyframe is also aligned densely to this many keyframes before it
+  // (beyond the one it was tracked against; 0: none), and the newest window_optimise keyframes
+  // are optimised with those edges. An alignment counts when it sees window_min_overlap of the
+  // earlier keyframe and moves the pair less than window_max_change_* from the graph's estimate.
+  // Measured in docs/benchmarks.md (Tracking: the local window).
+  int window_keyframes = 4;
+  int window_optimise = 20;
+  double window_min_overlap = 0.4;
+  double window_max_change_translation = 0.01;  // m
+  double window_max_change_rotation = 0.02;     // rad
+
   // Each edge's information is the aligner's per-pixel information times this many pixels: the
   // number of independent measurements an alignment is worth (neighbouring pixels are not
   // independent, so far fewer than the pixels used).

@@ -1,0 +1,64 @@
+#include "rgbdmap/slam/keyframe_window.hpp"
+
+#include "rgbdmap/slam/motion.hpp"
+
+namespace rgbdmap {
+
+KeyframeWindow::KeyframeWindow(const CameraIntrinsics& camera, const TrackingOptions& tracking,
+                               const LoopOptions& loop, double min_depth, double max_depth)
+    : camera_(camera),
+      tracking_(tracking),
+      options_(loop),
+      min_depth_(static_cast<float>(min_depth)),
+      max_depth_(static_cast<float>(max_depth)),
+      aligner_(tracking) {}
+
+std::vector<LoopMeasurement> KeyframeWindow::add(
+    const TrackedKeyframe& keyframe, const std::function<Eigen::Isometry3d(int)>& pose) {
+  std::vector<LoopMeasurement> measured;
+  if (options_.window_keyframes <= 0) return measured;
+  const int id = static_cast<int>(keyframe.id);
+  if (keyframe.color.empty() || keyframe.depth.empty()) {
+    entries_.clear();  // nothing to align with: the window starts again after it
+    return measured;
+  }
+  Frame frame;
+  frame.color = keyframe.color;
+  frame.depth = keyframe.depth;
+  frame.timestamp = keyframe.timestamp;
+  pyramid_.build(frame, camera_, tracking_.coarsest_level + 1, tracking_.finest_level,
+                 tracking_.undistort, min_depth_, max_depth_);
+  const Eigen::Isometry3d later = pose(id);
+  for (const Entry& earlier : entries_) {
+    if (earlier.id == keyframe.reference) continue;  // the tracker's own edge
+    const Eigen::Isometry3d guess = later.inverse() * pose(earlier.id);
+    const AlignmentResult result = aligner_.align(earlier.reference, pyramid_, guess);
+    if (!result.finite || result.overlap < options_.window_min_overlap ||
+        result.intensity_sigma > tracking_.max_residual)
+      continue;
+    // Odometry over a few keyframes is off by millimetres; an alignment that moves the pair by
+    // centimetres found something else (a repeated texture, a wall seen edge-on).
+    const Eigen::Isometry3d change = guess.inverse() * result.motion;
+    if (change.translation().norm() > options_.window_max_change_translation ||
+        rotationAngle(change) > options_.window_max_change_rotation)
+      continue;
+    LoopMeasurement m;
+    m.earlier = earlier.id;
+    m.later = id;
+    Eigen::Isometry3d relative = result.motion.inverse();
+    relative.linear() = Eigen::Quaterniond(relative.linear()).normalized().toRotationMatrix();
+    m.later_in_earlier = relative;
+    m.information = result.information;
+    m.overlap = result.overlap;
+    measured.push_back(m);
+  }
+  Entry entry;
+  entry.id = id;
+  entry.reference.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,
+                        static_cast<float>(tracking_.min_gradient));
+  entries_.push_back(std::move(entry));
+  while (static_cast<int>(entries_.size()) > options_.window_keyframes) entries_.pop_front();
+  return measured;
+}
+
+}  // namespace rgbdmap
