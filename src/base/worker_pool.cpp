@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "rgbdmap/base/thread_priority.hpp"
+
 namespace rgbdmap {
 
 WorkerPool::WorkerPool(int threads) {
@@ -36,6 +38,7 @@ void WorkerPool::work() {
 
 void WorkerPool::workerMain() {
   std::uint64_t seen = 0;
+  int niceness = 0;
   for (;;) {
     {
       std::unique_lock<std::mutex> lock(mutex_);
@@ -43,7 +46,9 @@ void WorkerPool::workerMain() {
       if (stop_) return;
       seen = generation_;
       ++active_;
+      niceness = niceness_;
     }
+    stepBackFromTracking(niceness);
     work();
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -64,6 +69,7 @@ void WorkerPool::runTasks(std::size_t count, Trampoline call, void* context) {
     call_ = call;
     context_ = context;
     error_ = nullptr;
+    niceness_ = threadNiceness();
     next_.store(0);
     ++generation_;
   }

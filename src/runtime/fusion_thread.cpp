@@ -3,6 +3,8 @@
 #include <chrono>
 #include <exception>
 
+#include "rgbdmap/base/thread_priority.hpp"
+
 namespace rgbdmap {
 FusionThread::FusionThread(Mapper& mapper, std::size_t slots, int width, int height,
                            ErrorHandler on_error)
@@ -45,6 +47,8 @@ void FusionThread::serveRequest() {
 }
 
 void FusionThread::run() {
+  // The map may lag a few keyframes behind (they wait in the queue); a frame's pose may not.
+  stepBackFromTracking(kFusionNiceness);
   bool finished = false;
   bool failed = false;
   while (!finished) {

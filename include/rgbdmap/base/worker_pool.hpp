@@ -54,6 +54,9 @@ class WorkerPool {
   void* context_ = nullptr;
   std::atomic<std::size_t> next_{0};
   std::exception_ptr error_;
+  // The caller's: workers run its tasks no sooner than it would (a fusion thread that gives way
+  // to tracking gives way with its workers).
+  int niceness_ = 0;
 };
 
 // Calls body(i) for every i in [0, count): on the pool when there is one, else in turn on the

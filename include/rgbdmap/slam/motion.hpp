@@ -1,13 +1,11 @@
 #pragma once
 
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <optional>
 
+#include "rgbdmap/base/thread_priority.hpp"
 #include "rgbdmap/slam/loop_options.hpp"
 
 namespace rgbdmap {
@@ -67,11 +65,8 @@ inline std::optional<double> loopSearchDistance(const Eigen::Isometry3d& later,
   return distance;
 }
 
-// The calling thread gives way to tracking and fusion when two cores are short (Linux: niceness
-// is per thread). Loop closure and localisation improve what those do; they come first.
-inline void giveWayToTracking() {
-  constexpr int kNiceness = 5;
-  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), kNiceness);
-}
+// The calling thread gives way to tracking and fusion when two cores are short. Loop closure and
+// localisation improve what those do; they come first.
+inline void giveWayToTracking() { stepBackFromTracking(kLoopNiceness); }
 
 }  // namespace rgbdmap
