@@ -77,7 +77,16 @@ TEST(SessionFile, HoldsTheRunsGraphPlacesAndKeyframeImages) {
   // Every fused keyframe kept (100 frames are within the budget), as the keyframe file says.
   EXPECT_EQ(session.keyframes.size(), lines(dir + "/map_keyframes.txt"));
   ASSERT_GE(session.graph.keyframes.size(), 5u);
-  EXPECT_EQ(session.graph.edges.size(), session.graph.keyframes.size() - 1);  // no loop here
+  // No loop here: each keyframe's odometry edge, and the local window's to earlier keyframes.
+  std::vector<int> tied(session.graph.keyframes.size(), 0);
+  for (const PoseGraph::Edge& e : session.graph.edges) {
+    EXPECT_FALSE(e.loop);
+    ASSERT_LT(e.from, e.to);
+    ++tied[static_cast<std::size_t>(e.to)];
+  }
+  EXPECT_EQ(tied.front(), 0);
+  for (std::size_t i = 1; i < tied.size(); ++i) EXPECT_GE(tied[i], 1) << "keyframe " << i;
+  EXPECT_GT(session.graph.edges.size(), session.graph.keyframes.size() - 1);
   EXPECT_EQ(session.graph.places.size(), session.graph.keyframes.size());
   ASSERT_TRUE(session.graph.places.front());
   EXPECT_GT(session.graph.places.front()->view.points.size(), 100u);

@@ -79,10 +79,14 @@ void Mapper::integrate(const Frame& keyframe, const Eigen::Isometry3d& pose, Vox
   if (stored > 0) stats_.map_blocks_stored.fetch_add(stored);
 }
 
-void Mapper::fuse(const Frame& keyframe) {
+void Mapper::fuse(const Frame& keyframe, const PoseCorrections::Snapshot* at) {
+  pinned_ = corrections_ ? at : nullptr;
+  struct Unpin {
+    const PoseCorrections::Snapshot*& pinned;
+    ~Unpin() { pinned = nullptr; }
+  } unpin{pinned_};
   const Eigen::Isometry3d pose =
-      corrections_ ? corrected(corrections_->snapshot(), keyframe.anchor, keyframe.pose)
-                   : keyframe.pose;
+      corrections_ ? corrected(latestCorrections(), keyframe.anchor, keyframe.pose) : keyframe.pose;
   if (free_space_) free_space_->carve(keyframe.depth, camera_, pose);
   if (!corrections_) {
     integrate(keyframe, pose, map_);
@@ -184,7 +188,7 @@ bool Mapper::refine(int keyframes) {
   if (!corrections_) return false;
   if (!refusing() && !region_) {
     // Joining a saved map takes in keyframes that are not in the TSDF at all: a whole pass.
-    const PoseCorrections::Snapshot latest = corrections_->snapshot();
+    const PoseCorrections::Snapshot latest = latestCorrections();
     const bool joined = joinSaved(latest);
     if (!joined && !lagsCorrections(latest)) return false;
     if (joined || !beginRegionPass(latest)) beginWholePass();
@@ -235,7 +239,7 @@ bool Mapper::beginRegionPass(const PoseCorrections::Snapshot& correction) {
 void Mapper::refineRegion(int keyframes) {
   RegionPass& pass = *region_;
   // Each at the newest corrections, as a whole pass does.
-  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  const PoseCorrections::Snapshot correction = latestCorrections();
   for (int k = 0; k < keyframes && pass.fused.size() < pass.keyframes.size(); ++k) {
     const std::size_t i = store_.find(pass.keyframes[pass.fused.size()]);
     if (i == store_.size()) {  // let go meanwhile
@@ -303,7 +307,7 @@ void Mapper::beginWholePass() {
 void Mapper::refineWhole(int keyframes) {
   // Each kept keyframe at the newest corrections: a loop closed meanwhile is taken in by the
   // rest of this pass, and the next pass (lagsCorrections) catches what it moved before.
-  const PoseCorrections::Snapshot correction = corrections_->snapshot();
+  const PoseCorrections::Snapshot correction = latestCorrections();
   for (int k = 0; k < keyframes && refused_at_.size() < store_.size(); ++k) {
     store_.decode(refused_at_.size(), decoded_);
     const Eigen::Isometry3d pose = corrected(correction, decoded_.anchor, decoded_.pose);

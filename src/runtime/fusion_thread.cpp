@@ -15,10 +15,16 @@ FusionThread::FusionThread(Mapper& mapper, std::size_t slots, int width, int hei
 
 FusionThread::~FusionThread() { finish(); }
 
-bool FusionThread::submit(const Frame& keyframe, bool wait) {
+bool FusionThread::submit(const Frame& keyframe, bool wait,
+                          std::optional<PoseCorrections::Snapshot> at) {
   Frame* slot = wait ? keyframes_.acquire() : keyframes_.tryAcquire();
   if (!slot) return false;
   copyFrame(keyframe, *slot);
+  if (at) {
+    follows_while_idle_.store(false);
+    std::lock_guard<std::mutex> lock(pinned_mutex_);
+    pinned_[slot] = std::move(*at);
+  }
   keyframes_.push(slot);
   return true;
 }
@@ -57,15 +63,23 @@ void FusionThread::run() {
     if (keyframe) {
       // After a failure the remaining keyframes are drained unfused: the map stays as it was.
       if (!failed) {
+        std::optional<PoseCorrections::Snapshot> at;
+        {
+          std::lock_guard<std::mutex> lock(pinned_mutex_);
+          if (auto it = pinned_.find(keyframe); it != pinned_.end()) {
+            at = std::move(it->second);
+            pinned_.erase(it);
+          }
+        }
         try {
-          mapper_.fuse(*keyframe);
+          mapper_.fuse(*keyframe, at ? &*at : nullptr);
         } catch (const std::exception& e) {
           failed = true;
           if (on_error_) on_error_(keyframe->origin + ": " + e.what());
         }
       }
       keyframes_.release(keyframe);
-    } else if (!finished && !failed) {
+    } else if (!finished && !failed && follows_while_idle_.load()) {
       // Idle: the map follows the latest loop closure, a kept keyframe at a time.
       try {
         mapper_.refine(1);

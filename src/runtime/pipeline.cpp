@@ -306,10 +306,21 @@ int Pipeline::run(RunControl& control) {
   };
   // Tracking never waits for fusion, except in a lossless replay, where waiting keeps the set of
   // keyframes (and so the map) independent of timing.
-  TrackingThread tracking(
-      {queue, tracker, fusion, publication, loop.shownPoses(outputs_.publisher != nullptr),
-       loop.before_placement.get()},
-      !live, config.checkpoint, checkpoint, stats_, control, fail);
+  TrackingThread::Parts parts{queue,
+                              tracker,
+                              fusion,
+                              publication,
+                              loop.shownPoses(outputs_.publisher != nullptr),
+                              loop.before_placement.get()};
+  if (!live && loop.loop_closer) {
+    // The local window moves the newest keyframes at every keyframe: fused at whatever the loop
+    // thread had reached, a replay's map would differ from run to run.
+    parts.settled_corrections = [&loop] {
+      loop.loop_closer->waitUntilIdle();
+      return loop.corrections->snapshot();
+    };
+  }
+  TrackingThread tracking(parts, !live, config.checkpoint, checkpoint, stats_, control, fail);
 
   // Wait: status until the tracking thread has taken every frame, then the rest in turn.
   StatusLine status(stats_, queue, outputs_.status_line, start);

@@ -64,7 +64,9 @@ void TrackingThread::track(Frame& frame) {
   try {
     bool keyframe = false;
     if (parts_.tracker.track(frame)) {
-      keyframe = parts_.fusion.submit(frame, wait_for_fusion_);
+      std::optional<PoseCorrections::Snapshot> at;
+      if (parts_.settled_corrections) at = parts_.settled_corrections();
+      keyframe = parts_.fusion.submit(frame, wait_for_fusion_, std::move(at));
       if (keyframe) {
         parts_.publication.afterKeyframe(frame);
         parts_.tracker.acceptKeyframe(frame);

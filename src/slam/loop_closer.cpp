@@ -134,6 +134,7 @@ void LoopCloser::run() {
       if (queue_.empty()) break;
       keyframe = std::move(queue_.front());
       queue_.pop_front();
+      processing_ = true;
     }
     changed_.notify_all();
     const auto start = std::chrono::steady_clock::now();
@@ -145,7 +146,17 @@ void LoopCloser::run() {
       failed = true;
     }
     stats_.loop_latency.record(secondsSince(start));
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      processing_ = false;
+    }
+    changed_.notify_all();
   }
+}
+
+void LoopCloser::waitUntilIdle() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [&] { return queue_.empty() && !processing_; });
 }
 
 PoseGraph::Edge LoopCloser::edgeOf(int from, int to, const Eigen::Isometry3d& measurement,

@@ -51,7 +51,10 @@ class Mapper {
          const PoseCorrections* corrections = nullptr, PoseSink* keyframe_trajectory = nullptr);
 
   // Fuses a keyframe, then re-fuses up to refusion_pace kept ones if the map is following a loop.
-  void fuse(const Frame& keyframe);
+  // `at`: the corrections to fuse and re-fuse at (a lossless replay's, taken when the keyframe
+  // was handed over, so that the map does not depend on when fusion got to it); null: the
+  // latest.
+  void fuse(const Frame& keyframe, const PoseCorrections::Snapshot* at = nullptr);
   // Re-fuses up to `keyframes` kept keyframes if the map lags the latest corrections; returns
   // whether it did any work (so an idle caller knows to call again).
   bool refine(int keyframes);
@@ -104,6 +107,10 @@ class Mapper {
   // Whether a kept keyframe's corrected pose (by `correction`, the latest) has moved by
   // refusion_shift from where it was fused.
   bool lagsCorrections(const PoseCorrections::Snapshot& correction);
+  // The corrections fuse() was given, else the latest.
+  PoseCorrections::Snapshot latestCorrections() const {
+    return pinned_ ? *pinned_ : corrections_->snapshot();
+  }
   // Takes in the saved keyframes once the run has joined their frame; returns whether it did.
   bool joinSaved(const PoseCorrections::Snapshot& correction);
   bool refusing() const { return shown_ != nullptr; }
@@ -127,6 +134,7 @@ class Mapper {
   RefusionOptions refusion_;
   std::size_t max_blocks_;  // in memory, by map.memory (0: no limit)
   const PoseCorrections* corrections_;
+  const PoseCorrections::Snapshot* pinned_ = nullptr;  // during fuse(), its `at`
   VoxelMap map_;
   KeyframeStore store_;
   // While a pass runs: the map it began from (what is shown), and the poses the first

@@ -5,8 +5,10 @@
 #include <cstddef>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
+#include <unordered_map>
 
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/mapping/mapper.hpp"
@@ -37,7 +39,11 @@ class FusionThread {
   // Hands a keyframe over. With `wait`, blocks until a slot is free (replay: lossless and
   // deterministic); without, returns false at once when every slot is busy (live: the caller
   // proposes a later frame instead).
-  bool submit(const Frame& keyframe, bool wait);
+  // `at`: the corrections to fuse it at (a lossless replay's, see Mapper::fuse); a fusion thread
+  // given them does not follow loops while idle either (how much it did would depend on timing),
+  // only a few kept keyframes per keyframe fused (RefusionOptions::refusion_pace).
+  bool submit(const Frame& keyframe, bool wait,
+              std::optional<PoseCorrections::Snapshot> at = std::nullopt);
   // Runs `task` on the fusion thread with the map between two keyframes (e.g. to take a
   // checkpoint snapshot). A request not yet served is replaced by a newer one of the same kind.
   void request(MapRequest kind, MapTask task);
@@ -56,6 +62,9 @@ class FusionThread {
   std::mutex request_mutex_;        // taken only when a request is made or served
   std::array<MapTask, 2> pending_;  // by MapRequest
   std::atomic<bool> requested_{false};
+  std::mutex pinned_mutex_;
+  std::unordered_map<const Frame*, PoseCorrections::Snapshot> pinned_;  // by queued slot
+  std::atomic<bool> follows_while_idle_{true};
   std::thread thread_;
 };
 

@@ -74,6 +74,10 @@ class LoopCloser : public KeyframeSink {
   std::uint64_t firstKeyframeId() const override { return static_cast<std::uint64_t>(first_own_); }
   // Processes every queued keyframe, then stops the thread. The corrections are final after it.
   void finish();
+  // Returns once every keyframe added so far has been taken into the graph (its window, loops
+  // and corrections published): what a lossless replay fuses at, so that its map does not depend
+  // on how far the loop thread had got.
+  void waitUntilIdle();
   // Calls `read` with the graph as it is now, from any thread: the loop thread waits while it
   // runs, and it waits at most for one optimisation. A session streams the graph to its file
   // this way (a copy of a long run's graph is megabytes, at every checkpoint).
@@ -149,6 +153,7 @@ class LoopCloser : public KeyframeSink {
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<TrackedKeyframe> queue_;
+  bool processing_ = false;  // a keyframe taken from the queue is being processed
   bool finishing_ = false;
   std::thread thread_;
 };
