@@ -1,17 +1,29 @@
 #include "rgbdmap/slam/keyframe_window.hpp"
 
+#include <algorithm>
+
 #include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
 
+namespace {
+
+TrackingOptions windowOptions(TrackingOptions tracking, const LoopOptions& loop) {
+  if (loop.window_finest_level >= 0)
+    tracking.finest_level = std::min(loop.window_finest_level, tracking.coarsest_level);
+  return tracking;
+}
+
+}  // namespace
+
 KeyframeWindow::KeyframeWindow(const CameraIntrinsics& camera, const TrackingOptions& tracking,
                                const LoopOptions& loop, double min_depth, double max_depth)
     : camera_(camera),
-      tracking_(tracking),
+      tracking_(windowOptions(tracking, loop)),
       options_(loop),
       min_depth_(static_cast<float>(min_depth)),
       max_depth_(static_cast<float>(max_depth)),
-      aligner_(tracking) {}
+      aligner_(tracking_) {}
 
 std::vector<LoopMeasurement> KeyframeWindow::add(
     const TrackedKeyframe& keyframe, const std::function<Eigen::Isometry3d(int)>& pose) {
@@ -22,10 +34,7 @@ std::vector<LoopMeasurement> KeyframeWindow::add(
     entries_.clear();  // nothing to align with: the window starts again after it
     return measured;
   }
-  Frame frame;
-  frame.color = keyframe.color;
-  frame.depth = keyframe.depth;
-  frame.timestamp = keyframe.timestamp;
+  const Frame frame = keyframe.frame();
   pyramid_.build(frame, camera_, tracking_.coarsest_level + 1, tracking_.finest_level,
                  tracking_.undistort, min_depth_, max_depth_);
   const Eigen::Isometry3d later = pose(id);

@@ -51,6 +51,8 @@ Keys loopKeys(LoopOptions& o) {
       integer("loop.window_keyframes", &o.window_keyframes, 0, 100,
               "each new keyframe is aligned to this many keyframes before it too (0: only to the "
               "one it was tracked against)"),
+      integer("loop.window_finest_level", &o.window_finest_level, -1, 6,
+              "finest pyramid level of the window's alignments (-1: tracking.finest_level)"),
       integer("loop.window_optimise", &o.window_optimise, 2, 100000,
               "keyframes optimised after a new keyframe's window alignments"),
       number("loop.window_min_overlap", &o.window_min_overlap, 0, 1,

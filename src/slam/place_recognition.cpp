@@ -69,10 +69,7 @@ void PlaceRecognition::add(const TrackedKeyframe& keyframe) {
   if (keyframe.color.empty() || keyframe.depth.empty()) return;  // nothing to recognise it by
   auto place = std::make_shared<Place>();
   Place& entry = *place;
-  Frame frame;
-  frame.color = keyframe.color;
-  frame.depth = keyframe.depth;
-  frame.timestamp = keyframe.timestamp;
+  const Frame frame = keyframe.frame();
   pyramid_.build(frame, camera_, tracking_.coarsest_level + 1, tracking_.finest_level,
                  tracking_.undistort, min_depth_, max_depth_);
   reference_.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,

@@ -56,6 +56,7 @@ struct LoopOptions {
   // earlier keyframe and moves the pair less than window_max_change_* from the graph's estimate.
   // Measured in docs/benchmarks.md (Tracking: the local window).
   int window_keyframes = 4;
+  int window_finest_level = -1;  // pyramid level the window aligns down to; -1: the tracker's
   int window_optimise = 20;
   double window_min_overlap = 0.4;
   double window_max_change_translation = 0.01;  // m

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 
+#include "rgbdmap/base/frame.hpp"
+
 namespace rgbdmap {
 
 // A tracking keyframe as the tracker made it: what a pose graph needs (its odometry pose and the
@@ -22,6 +24,15 @@ struct TrackedKeyframe {
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
   cv::Mat color;  // CV_8UC3 BGR, full resolution; the receiver's own (never written again)
   cv::Mat depth;  // CV_32FC1 metres
+
+  // Its images as a frame (shared, not copied): what an image pyramid is built from.
+  Frame frame() const {
+    Frame out;
+    out.color = color;
+    out.depth = depth;
+    out.timestamp = timestamp;
+    return out;
+  }
 };
 
 // Whoever wants the tracker's keyframes (the loop closer). Called on the tracking thread: an
