@@ -51,14 +51,9 @@ std::vector<LoopMeasurement> KeyframeWindow::add(
     if (change.translation().norm() > options_.window_max_change_translation ||
         rotationAngle(change) > options_.window_max_change_rotation)
       continue;
-    LoopMeasurement m;
+    LoopMeasurement m = measurementOf(result);
     m.earlier = earlier.id;
     m.later = id;
-    Eigen::Isometry3d relative = result.motion.inverse();
-    relative.linear() = Eigen::Quaterniond(relative.linear()).normalized().toRotationMatrix();
-    m.later_in_earlier = relative;
-    m.information = result.information;
-    m.overlap = result.overlap;
     measured.push_back(m);
   }
   Entry entry;

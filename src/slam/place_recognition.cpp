@@ -30,6 +30,10 @@ std::optional<LoopMeasurement> verifiedLoop(const AlignmentResult& dense,
       angle(change) > loop.max_disagreement_rotation ||
       dense.motion.translation().norm() > loop.max_distance)
     return std::nullopt;
+  return measurementOf(dense);
+}
+
+LoopMeasurement measurementOf(const AlignmentResult& dense) {
   LoopMeasurement measured;
   Eigen::Isometry3d relative = dense.motion.inverse();
   relative.linear() = Eigen::Quaterniond(relative.linear()).normalized().toRotationMatrix();

@@ -8,7 +8,7 @@ namespace rgbdmap {
 // How far each background thread steps back from tracking when two cores are short (Linux
 // niceness, per thread). Tracking must answer every frame within its period; fusion may lag a
 // few keyframes behind (its queue), loop closure and localisation more. Measured on the 30 x 20 m
-// floor at the camera's rate (docs/benchmarks.md, "Threads and tracking time").
+// floor at the camera's rate (docs/benchmarks.md, "The local window").
 constexpr int kFusionNiceness = 3;
 constexpr int kLoopNiceness = 10;
 

@@ -30,6 +30,11 @@ struct LoopMeasurement {
 // finest_level, depth_weight).
 TrackingOptions loopVerificationOptions(const TrackingOptions& tracking, const LoopOptions& loop);
 
+// A dense alignment (which maps the earlier keyframe's points into the later camera) as a
+// measurement of the later keyframe in the earlier one: later_in_earlier, information and
+// overlap (ids and counts left to the caller).
+LoopMeasurement measurementOf(const AlignmentResult& dense);
+
 // Loop closure's checks of a dense alignment (`verification`: loopVerificationOptions) started
 // from the features' pose `by_features` (both map the earlier keyframe's points into the later
 // camera): it overlaps, fits, agrees with the features and joins near views. The measurement
