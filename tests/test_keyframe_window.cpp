@@ -64,9 +64,10 @@ class KeyframeWindowTest : public ::testing::Test {
 };
 
 TEST_F(KeyframeWindowTest, MeasuresTheNewestKeyframeAgainstTheOnesBeforeItsReference) {
-  // Odometry put the newest keyframe 7 mm and 0.6 degrees from where it is.
+  // Odometry put the newest keyframe 4 mm and 0.3 degrees from where it is (within the gate,
+  // loop.window_max_change_*).
   std::vector<Eigen::Isometry3d> estimate = truth();
-  estimate[3] = moved(estimate[3], {0.005, -0.003, 0.004}, 0.01);
+  estimate[3] = moved(estimate[3], {0.003, -0.002, 0.002}, 0.005);
   const std::vector<LoopMeasurement> measured = lastMeasured(LoopOptions{}, estimate);
   // Keyframes 0 and 1; 2 is the one it was tracked against (the tracker's edge).
   ASSERT_EQ(measured.size(), 2u);

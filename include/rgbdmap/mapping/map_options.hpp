@@ -15,7 +15,7 @@ struct MapOptions {
   int fusion_threads = 0;             // 0 = every core in a replay, 1 for a live camera
   // TSDF blocks in memory at most (MB); beyond it the least recently updated go to a scratch file
   // on disk and come back when the camera returns (VoxelMap::keepWithin). 0: no limit.
-  double memory = 96.0;
+  double memory = 64.0;
 };
 
 // With loop closure the map follows the pose graph (Mapper): fused keyframes are kept
@@ -30,7 +30,7 @@ struct RefusionOptions {
   int refusion_pace = 2;
   // Kept keyframes' images take at most this much memory; beyond it views shared with another
   // kept keyframe are let go, and the oldest unique ones move to disk (KeyframeStore).
-  double keyframe_memory = 64.0;  // MB
+  double keyframe_memory = 48.0;  // MB
   // A pass fuses again only the cells the keyframes a loop moved see (KeyframeFootprint), from
   // the kept keyframes that see them, when those are at most this share of the kept keyframes;
   // beyond it the whole map, which holds one TSDF where a region pass holds a second for its

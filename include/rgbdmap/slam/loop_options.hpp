@@ -55,12 +55,15 @@ struct LoopOptions {
   // are optimised with those edges. An alignment counts when it sees window_min_overlap of the
   // earlier keyframe and moves the pair less than window_max_change_* from the graph's estimate.
   // Measured in docs/benchmarks.md (Tracking: the local window).
+  // Aligned at 320 x 240 (level 1), finer than the tracker, and so gated more tightly: on
+  // rendered floors a finer pair is millimetres better than odometry, on real fast turns it is
+  // not, and the tight gate keeps those out.
   int window_keyframes = 4;
-  int window_finest_level = -1;  // pyramid level the window aligns down to; -1: the tracker's
+  int window_finest_level = 1;  // pyramid level the window aligns down to; -1: the tracker's
   int window_optimise = 20;
   double window_min_overlap = 0.4;
-  double window_max_change_translation = 0.01;  // m
-  double window_max_change_rotation = 0.02;     // rad
+  double window_max_change_translation = 0.005;  // m
+  double window_max_change_rotation = 0.01;      // rad
 
   // Each edge's information is the aligner's per-pixel information times this many pixels: the
   // number of independent measurements an alignment is worth (neighbouring pixels are not
