@@ -9,9 +9,10 @@ namespace rgbdmap {
 namespace {
 
 TrackingOptions windowOptions(TrackingOptions tracking, const LoopOptions& loop) {
-  if (loop.window_finest_level < 0 || loop.window_finest_level >= tracking.finest_level) {
-    if (loop.window_finest_level >= 0)
-      tracking.finest_level = std::min(loop.window_finest_level, tracking.coarsest_level);
+  const int level = loop.window_finest_level;
+  if (level < 0) return tracking;  // the tracker's own levels
+  if (level >= tracking.finest_level) {
+    tracking.finest_level = std::min(level, tracking.coarsest_level);
     return tracking;
   }
   // Finer than the tracker: a pair starts where the graph puts it, which the gate keeps within
@@ -19,7 +20,7 @@ TrackingOptions windowOptions(TrackingOptions tracking, const LoopOptions& loop)
   // and half the steps are enough there: the same edges on the 30 x 20 m floor, and a lossless
   // replay of it 97 s instead of 115 (docs/benchmarks.md).
   tracking.coarsest_level = tracking.finest_level;
-  tracking.finest_level = loop.window_finest_level;
+  tracking.finest_level = level;
   tracking.max_iterations = std::max(1, tracking.max_iterations / 2);
   tracking.finest_iterations = std::max(1, tracking.finest_iterations / 2);
   return tracking;
