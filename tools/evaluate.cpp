@@ -32,19 +32,22 @@ std::string statisticsJson(const char* prefix, const ErrorStatistics& s, const c
 }
 
 int evaluateMapCommand(const std::string& map_path, const std::string& scene, double tau,
-                       const std::string& trajectory, const std::string& json) {
+                       const std::string& trajectory, const std::string& align,
+                       const std::string& json) {
   const SyntheticGroundTruth truth = loadSyntheticGroundTruth(scene);
   pcl::PointCloud<pcl::PointXYZRGB> map = loadMapFile(map_path);
   if (!trajectory.empty()) {
-    // A map made from odometry lives in its first camera's frame: moved onto the scene's by the
-    // alignment that scores its trajectory (ATE), so the score is the map's, not the frame's.
+    // A map made from odometry lives in its first camera's frame: moved onto the scene's by its
+    // trajectory, so that the score is the map's, not the frame's.
     const Trajectory estimate = Trajectory::load(trajectory);
     const Trajectory groundtruth = Trajectory::load(scene + "/groundtruth.txt");
     const AbsoluteTrajectoryError ate = absoluteTrajectoryError(estimate, groundtruth);
-    const Eigen::Isometry3f alignment = ate.alignment.cast<float>();
-    for (auto& p : map.points) p.getVector3fMap() = alignment * p.getVector3fMap();
-    std::printf("aligned     by %s (ATE %.2f mm over %zu poses)\n", trajectory.c_str(),
-                1000.0 * ate.translation.rmse, ate.translation.count);
+    const Eigen::Isometry3d alignment =
+        align == "positions" ? ate.alignment : alignViews(estimate, groundtruth);
+    for (auto& p : map.points) p.getVector3fMap() = alignment.cast<float>() * p.getVector3fMap();
+    std::printf("aligned     by %s's %s (ATE %.2f mm over %zu poses)\n", trajectory.c_str(),
+                align == "positions" ? "positions" : "camera views", 1000.0 * ate.translation.rmse,
+                ate.translation.count);
   }
   const MapScore s = evaluateMap(map, truth.scene, truth.visible_surface, tau);
   std::printf("map         %s (%zu points)\n", map_path.c_str(), s.map_points);
@@ -100,7 +103,7 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
   cmd->require_subcommand(1);
 
   struct MapOptions {
-    std::string map, scene, json, trajectory;
+    std::string map, scene, json, trajectory, align = "views";
     double tau = 0.01;
   };
   auto m = std::make_shared<MapOptions>();
@@ -119,10 +122,17 @@ void addEvaluateCommand(CLI::App& app, Command& selected) {
                       "the map's trajectory (e.g. MAP_trajectory.txt): the map is first moved by "
                       "the alignment of this trajectory to the scene's groundtruth.txt (maps "
                       "made with odometry are in the first camera's frame)");
+  map_cmd
+      ->add_option("--align", m->align,
+                   "with --trajectory: views moves the cameras' views onto the groundtruth ones "
+                   "(centres and points ahead of them: fixes the tilt of a trajectory at one "
+                   "height); positions moves the centres only, as the ATE does")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"views", "positions"}));
   map_cmd->add_option("--json", m->json, "also write the results as JSON");
   map_cmd->callback([m, &selected] {
     selected = [m] {
-      return evaluateMapCommand(m->map, m->scene, m->tau, m->trajectory, m->json);
+      return evaluateMapCommand(m->map, m->scene, m->tau, m->trajectory, m->align, m->json);
     };
   });
 

@@ -73,6 +73,7 @@ std::string RunStats::toJson() const {
       << "  \"loops_accepted\": " << loops_accepted << ",\n"
       << "  \"loops_rejected\": " << loops_rejected << ",\n"
       << "  \"loop_keyframes_unsearched\": " << loop_keyframes_unsearched << ",\n"
+      << "  \"floor_observations\": " << floor_observations << ",\n"
       << "  \"map_refusions\": " << map_refusions << ",\n"
       << "  \"region_refusions\": " << region_refusions << ",\n"
       << "  \"keyframes_refused\": " << keyframes_refused << ",\n"

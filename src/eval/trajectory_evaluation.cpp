@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include "rgbdmap/base/error.hpp"
@@ -82,6 +83,29 @@ AbsoluteTrajectoryError absoluteTrajectoryError(const Trajectory& estimate,
     residuals.push_back((ate.alignment * estimated[i] - truth[i]).norm());
   ate.translation = errorStatistics(std::move(residuals));
   return ate;
+}
+
+Eigen::Isometry3d alignViews(const Trajectory& estimate, const Trajectory& groundtruth,
+                             double max_difference) {
+  const auto pairs = associate(groundtruth.timestamps(), estimate.timestamps(), max_difference);
+  if (pairs.size() < 3)
+    throw InputError("alignment: only " + std::to_string(pairs.size()) +
+                     " estimated poses have a groundtruth stamp within " +
+                     std::to_string(max_difference) + " s; need at least 3");
+  // Camera frame: x right, y down, z along the optical axis; tan(30 deg) = 0.577 at 2 m is
+  // 1.15 m, tan(22.5 deg) 0.83 m.
+  const Eigen::Vector3d view[] = {
+      {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}, {0.0, 0.0, 3.0}, {-1.15, 0.0, 2.0}, {0.0, -0.83, 2.0}};
+  std::vector<Eigen::Vector3d> truth, estimated;
+  truth.reserve(pairs.size() * std::size(view));
+  estimated.reserve(pairs.size() * std::size(view));
+  for (const auto& [g, e] : pairs) {
+    for (const Eigen::Vector3d& v : view) {
+      truth.push_back(groundtruth[g].pose * v);
+      estimated.push_back(estimate[e].pose * v);
+    }
+  }
+  return alignRigid(estimated, truth);
 }
 
 RelativePoseError relativePoseError(const Trajectory& estimate, const Trajectory& groundtruth,

@@ -33,7 +33,8 @@ LoopCloser::LoopCloser(const CameraIntrinsics& camera, const TrackingOptions& tr
       stats_(stats),
       lossless_(lossless),
       places_(camera, tracking, loop, min_depth, max_depth),
-      window_(camera, tracking, loop, min_depth, max_depth) {
+      window_(camera, tracking, loop, min_depth, max_depth),
+      floor_(camera, min_depth, max_depth, KeyframeFloor::Config{}) {
   if (continued) restore(*continued);
   thread_ = std::thread([this] { run(); });
 }
@@ -211,7 +212,8 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
   graph_lock.unlock();
 
   places_.add(keyframe);
-  tighten(window_.add(keyframe, [this](int k) { return graph_.pose(k); }));
+  const bool floor_seen = observeFloor(id, keyframe.depth);
+  tighten(window_.add(keyframe, [this](int k) { return graph_.pose(k); }), floor_seen);
   keyframe.color.release();
   keyframe.depth.release();
   std::vector<LoopMeasurement> accepted;
@@ -352,8 +354,45 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
       angle(moved) * kDegreesPerRadian, graph_.size() - first_free, summary.seconds * 1e3);
 }
 
-void LoopCloser::tighten(const std::vector<LoopMeasurement>& local) {
-  if (local.empty()) return;
+bool LoopCloser::observeFloor(int id, const cv::Mat& depth) {
+  // Before the run joins a saved map its keyframes are in a frame of their own.
+  if (!options_.floor || !joined()) return false;
+  const Eigen::Isometry3d pose = graph_.pose(id);
+  std::optional<CameraPlane> seen;
+  if (graph_.hasWorldPlane()) {
+    const Eigen::Vector3d n = graph_.worldPlaneNormal();
+    CameraPlane guess;
+    guess.normal = pose.linear().transpose() * n;
+    guess.distance = graph_.worldPlaneDistance() - n.dot(pose.translation());
+    seen = floor_.near(depth, guess);
+  } else {
+    // The world's frame is its first camera's, held roughly upright: up is about -y.
+    seen = floor_.discover(depth, pose.linear().transpose() * -Eigen::Vector3d::UnitY());
+  }
+  if (!seen) return false;
+  std::lock_guard<std::mutex> graph_lock(graph_mutex_);
+  if (!graph_.hasWorldPlane()) {
+    const Eigen::Vector3d n = pose.linear() * seen->normal;
+    graph_.setWorldPlane(n, seen->distance + n.dot(pose.translation()));
+    spdlog::info("floor: found {:.2f} m below keyframe {}; keyframes that see it are tied to it",
+                 -seen->distance, id);
+  }
+  PoseGraph::PlaneObservation o;
+  o.node = id;
+  for (int i = 0; i < 3; ++i) o.normal[i] = static_cast<float>(seen->normal[i]);
+  o.distance = static_cast<float>(seen->distance);
+  // A narrow strip of floor (a view along a wall) measures its tilt across itself less well.
+  constexpr double kFullExtent = 0.3;  // m, where the tilt is as good as a fit gets
+  o.sigma_normal =
+      static_cast<float>(options_.floor_sigma_tilt * std::max(1.0, kFullExtent / seen->extent));
+  o.sigma_distance = static_cast<float>(options_.floor_sigma_height);
+  graph_.addPlaneObservation(o);
+  stats_.floor_observations.fetch_add(1, std::memory_order_relaxed);
+  return true;
+}
+
+void LoopCloser::tighten(const std::vector<LoopMeasurement>& local, bool floor_seen) {
+  if (local.empty() && !floor_seen) return;
   const int first_free =
       std::max(graph_.size() - options_.window_optimise, joined() ? 0 : first_own_);
   std::lock_guard<std::mutex> graph_lock(graph_mutex_);

@@ -57,6 +57,13 @@ Keys loopKeys(LoopOptions& o) {
               "keyframes optimised after a new keyframe's window alignments"),
       number("loop.window_min_overlap", &o.window_min_overlap, 0, 1,
              "share of the earlier keyframe's pixels a window alignment must see"),
+      boolean("loop.floor", &o.floor,
+              "tie each keyframe that sees the floor to one world floor in the pose graph (no "
+              "drift in height or tilt); false: relative motions only"),
+      number("loop.floor_sigma_height", &o.floor_sigma_height, 1e-5, 1,
+             "standard deviation of a keyframe's measured height over the floor (m)"),
+      number("loop.floor_sigma_tilt", &o.floor_sigma_tilt, 1e-6, 1,
+             "standard deviation of a keyframe's measured tilt against the floor (rad)"),
       number("loop.window_max_change_translation", &o.window_max_change_translation, 0, 10,
              "a window alignment may move the pair this far from the graph's estimate (m)"),
       number("loop.window_max_change_rotation", &o.window_max_change_rotation, 0, 3.15,

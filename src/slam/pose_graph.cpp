@@ -40,7 +40,37 @@ struct RelativePoseCost {
   }
 };
 
+// The world plane as the node's camera would see it, against what it saw.
+struct PlaneCost {
+  Eigen::Vector3d world_normal;
+  double world_distance;
+  Eigen::Vector3d normal;
+  double distance;
+  double normal_weight, distance_weight;
+
+  template <typename T>
+  bool operator()(const T* t, const T* q, T* residual) const {
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> position(t);
+    const Eigen::Map<const Eigen::Quaternion<T>> rotation(q);
+    const Eigen::Matrix<T, 3, 1> n = world_normal.cast<T>();
+    const Eigen::Matrix<T, 3, 1> predicted = rotation.conjugate() * n;
+    for (int i = 0; i < 3; ++i) residual[i] = T(normal_weight) * (predicted[i] - T(normal[i]));
+    residual[3] = T(distance_weight) * (T(world_distance) - n.dot(position) - T(distance));
+    return true;
+  }
+};
+
 }  // namespace
+
+void PoseGraph::setWorldPlane(const Eigen::Vector3d& normal, double distance) {
+  world_normal_ = normal.normalized();
+  world_distance_ = distance;
+  has_world_plane_ = true;
+}
+
+void PoseGraph::addPlaneObservation(const PlaneObservation& observation) {
+  planes_.push_back(observation);
+}
 
 int PoseGraph::addNode(const Eigen::Isometry3d& estimate) {
   nodes_.emplace_back();
@@ -69,6 +99,7 @@ void PoseGraph::addEdge(const Edge& edge) { edges_.push_back(edge); }
 PoseGraph::Checkpoint PoseGraph::checkpoint(int first_free) const {
   Checkpoint c;
   c.edges = edges_.size();
+  c.planes = planes_.size();
   c.first_free = std::clamp(first_free, 0, size());
   c.nodes.assign(nodes_.begin() + c.first_free, nodes_.end());
   return c;
@@ -76,6 +107,7 @@ PoseGraph::Checkpoint PoseGraph::checkpoint(int first_free) const {
 
 void PoseGraph::rollBack(const Checkpoint& c) {
   edges_.resize(std::min(c.edges, edges_.size()));
+  planes_.resize(std::min(c.planes, planes_.size()));
   std::copy(c.nodes.begin(), c.nodes.end(), nodes_.begin() + c.first_free);
 }
 
@@ -164,6 +196,15 @@ PoseGraph::Summary PoseGraph::optimise(int max_iterations, int first_free) {
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
         new RelativePoseCost{e.measurement(), e.sqrtInformation()});
     problem.AddResidualBlock(cost, nullptr, a.t, a.q, b.t, b.q);
+  }
+  for (const PlaneObservation& o : planes_) {
+    if (!has_world_plane_ || o.node < first_free) continue;
+    Node& n = nodes_[static_cast<std::size_t>(o.node)];
+    auto* cost = new ceres::AutoDiffCostFunction<PlaneCost, 4, 3, 4>(new PlaneCost{
+        world_normal_, world_distance_,
+        Eigen::Vector3f(o.normal[0], o.normal[1], o.normal[2]).cast<double>(),
+        static_cast<double>(o.distance), 1.0 / o.sigma_normal, 1.0 / o.sigma_distance});
+    problem.AddResidualBlock(cost, nullptr, n.t, n.q);
   }
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     Node& n = nodes_[i];

@@ -66,6 +66,8 @@ struct RunStats {
   std::atomic<std::uint64_t> loops_accepted{0};
   std::atomic<std::uint64_t> loops_rejected{0};
   std::atomic<std::uint64_t> loop_keyframes_unsearched{0};
+  // Keyframes whose view of the floor tied them to it in the pose graph (loop.floor).
+  std::atomic<std::uint64_t> floor_observations{0};
   // With loop closure: times the map was fused again from the kept keyframes to follow a loop
   // (of which region passes: only where the loop moved it), and keyframes fused again in all.
   std::atomic<std::uint64_t> map_refusions{0};

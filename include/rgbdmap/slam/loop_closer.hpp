@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rgbdmap/base/run_stats.hpp"
+#include "rgbdmap/slam/keyframe_floor.hpp"
 #include "rgbdmap/slam/keyframe_window.hpp"
 #include "rgbdmap/slam/place_recognition.hpp"
 #include "rgbdmap/slam/pose_graph.hpp"
@@ -125,8 +126,12 @@ class LoopCloser : public KeyframeSink {
   bool plausible(const LoopMeasurement& loop) const;
   bool agree(const LoopMeasurement& a, const LoopMeasurement& b) const;
   void close(const std::vector<LoopMeasurement>& loops);
-  // The newest keyframe's window alignments as edges, and the newest keyframes optimised.
-  void tighten(const std::vector<LoopMeasurement>& local);
+  // Ties keyframe `id` to the world floor when its depth shows the floor (loop.floor); the first
+  // floor seen becomes the world's. Whether it did.
+  bool observeFloor(int id, const cv::Mat& depth);
+  // The newest keyframe's window alignments as edges, and the newest keyframes optimised (also
+  // when only its floor was added).
+  void tighten(const std::vector<LoopMeasurement>& local, bool floor_seen);
   void publish();
   PoseGraph::Edge edgeOf(int from, int to, const Eigen::Isometry3d& measurement,
                          const Eigen::Matrix<double, 6, 6>& information, bool loop) const;
@@ -137,6 +142,7 @@ class LoopCloser : public KeyframeSink {
   bool lossless_;
   PlaceRecognition places_;
   KeyframeWindow window_;
+  KeyframeFloor floor_;
   // Changed on the loop thread only, under `graph_mutex_` so that readGraph() sees them whole.
   PoseGraph graph_;
   std::vector<Node> nodes_;

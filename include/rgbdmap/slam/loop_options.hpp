@@ -65,6 +65,15 @@ struct LoopOptions {
   double window_max_change_translation = 0.005;  // m
   double window_max_change_rotation = 0.01;      // rad
 
+  // The floor: each keyframe that sees it (a large plane near where the graph puts the floor, or
+  // before there is one, the largest level-ish plane well below the first camera) is tied to one
+  // world floor, with these standard deviations of its height over it and of its tilt. Odometry
+  // and the local window leave a slow drift in height and tilt that a floor seen from far off
+  // turns into centimetres; the floor has none (docs/loop-closure.md).
+  bool floor = true;
+  double floor_sigma_height = 0.0025;  // m
+  double floor_sigma_tilt = 0.0015;    // rad
+
   // Each edge's information is the aligner's per-pixel information times this many pixels: the
   // number of independent measurements an alignment is worth (neighbouring pixels are not
   // independent, so far fewer than the pixels used).

@@ -42,11 +42,22 @@ class PoseGraph {
     double t[3];
     double q[4];  // x y z w (Eigen's order)
   };
+  // One plane of the world (the floor: worldPlane()) as a node's camera saw it, n . x = d in the
+  // camera's frame: ties the node's tilt and height to the plane, which no chain of relative
+  // motions does (their small errors add up into a floor that climbs or tilts).
+  struct PlaneObservation {
+    int node = 0;
+    float normal[3] = {0, 0, 0};
+    float distance = 0;
+    float sigma_normal = 1e-3f;    // rad
+    float sigma_distance = 2e-3f;  // m
+  };
   // Enough to undo a tentative change (edges added, then optimise(.., first_free)): the edge
   // count and the estimates of the nodes from first_free on. A copy of the whole graph would
   // cost as much as the graph, which grows with every keyframe.
   struct Checkpoint {
     std::size_t edges = 0;
+    std::size_t planes = 0;
     int first_free = 0;
     std::vector<Node> nodes;
   };
@@ -63,6 +74,14 @@ class PoseGraph {
   void hold(int node, bool held);
   void addEdge(const Edge& edge);
   void removeLastEdges(std::size_t count);  // undoes the last `count` addEdge calls
+  // The world's plane (n . x = d, n unit, in the world frame) that plane observations see; it is
+  // held where it is set (by the first observation, where the graph had its camera then).
+  void setWorldPlane(const Eigen::Vector3d& normal, double distance);
+  bool hasWorldPlane() const { return has_world_plane_; }
+  Eigen::Vector3d worldPlaneNormal() const { return world_normal_; }
+  double worldPlaneDistance() const { return world_distance_; }
+  void addPlaneObservation(const PlaneObservation& observation);
+  const std::vector<PlaneObservation>& planeObservations() const { return planes_; }
   Checkpoint checkpoint(int first_free) const;
   void rollBack(const Checkpoint& checkpoint);  // no node may have been added since
 
@@ -88,6 +107,10 @@ class PoseGraph {
   std::vector<Node> nodes_;
   std::deque<Edge> edges_;
   std::vector<int> held_;
+  bool has_world_plane_ = false;
+  Eigen::Vector3d world_normal_ = Eigen::Vector3d::UnitZ();
+  double world_distance_ = 0.0;
+  std::vector<PlaneObservation> planes_;  // 24 bytes a keyframe that saw the floor
 };
 
 }  // namespace rgbdmap
