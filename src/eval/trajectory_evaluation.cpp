@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
+#include <string>
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/association.hpp"
@@ -19,6 +20,19 @@ std::size_t closestIndex(const std::vector<double>& stamps, double t) {
   if (after == stamps.end()) return stamps.size() - 1;
   const std::size_t j = static_cast<std::size_t>(after - stamps.begin());
   return (t - stamps[j - 1] <= stamps[j] - t) ? j - 1 : j;
+}
+
+// (groundtruth, estimate) index pairs by TUM's rule; at least 3, else InputError naming `what`.
+std::vector<std::pair<std::size_t, std::size_t>> associatedPoses(const Trajectory& estimate,
+                                                                 const Trajectory& groundtruth,
+                                                                 double max_difference,
+                                                                 const std::string& what) {
+  auto pairs = associate(groundtruth.timestamps(), estimate.timestamps(), max_difference);
+  if (pairs.size() < 3)
+    throw InputError(what + ": only " + std::to_string(pairs.size()) +
+                     " estimated poses have a groundtruth stamp within " +
+                     std::to_string(max_difference) + " s; need at least 3");
+  return pairs;
 }
 
 }  // namespace
@@ -65,11 +79,7 @@ ErrorStatistics errorStatistics(std::vector<double> errors) {
 AbsoluteTrajectoryError absoluteTrajectoryError(const Trajectory& estimate,
                                                 const Trajectory& groundtruth,
                                                 double max_difference) {
-  const auto pairs = associate(groundtruth.timestamps(), estimate.timestamps(), max_difference);
-  if (pairs.size() < 3)
-    throw InputError("ATE: only " + std::to_string(pairs.size()) +
-                     " estimated poses have a groundtruth stamp within " +
-                     std::to_string(max_difference) + " s; need at least 3");
+  const auto pairs = associatedPoses(estimate, groundtruth, max_difference, "ATE");
   std::vector<Eigen::Vector3d> truth, estimated;
   for (const auto& [g, e] : pairs) {
     truth.push_back(groundtruth[g].pose.translation());
@@ -87,11 +97,7 @@ AbsoluteTrajectoryError absoluteTrajectoryError(const Trajectory& estimate,
 
 Eigen::Isometry3d alignViews(const Trajectory& estimate, const Trajectory& groundtruth,
                              double max_difference) {
-  const auto pairs = associate(groundtruth.timestamps(), estimate.timestamps(), max_difference);
-  if (pairs.size() < 3)
-    throw InputError("alignment: only " + std::to_string(pairs.size()) +
-                     " estimated poses have a groundtruth stamp within " +
-                     std::to_string(max_difference) + " s; need at least 3");
+  const auto pairs = associatedPoses(estimate, groundtruth, max_difference, "alignment");
   // Camera frame: x right, y down, z along the optical axis; tan(30 deg) = 0.577 at 2 m is
   // 1.15 m, tan(22.5 deg) 0.83 m.
   const Eigen::Vector3d view[] = {
