@@ -42,7 +42,7 @@ class PoseGraph {
     double t[3];
     double q[4];  // x y z w (Eigen's order)
   };
-  // One plane of the world (the floor: worldPlane()) as a node's camera saw it, n . x = d in the
+  // The world plane (the floor: setWorldPlane()) as a node's camera saw it, n . x = d in the
   // camera's frame: ties the node's tilt and height to the plane, which no chain of relative
   // motions does (their small errors add up into a floor that climbs or tilts).
   struct PlaneObservation {
@@ -110,7 +110,7 @@ class PoseGraph {
   bool has_world_plane_ = false;
   Eigen::Vector3d world_normal_ = Eigen::Vector3d::UnitZ();
   double world_distance_ = 0.0;
-  std::vector<PlaneObservation> planes_;  // 24 bytes a keyframe that saw the floor
+  std::vector<PlaneObservation> planes_;  // 28 bytes a keyframe that saw the floor
 };
 
 }  // namespace rgbdmap
