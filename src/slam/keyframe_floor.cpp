@@ -3,16 +3,12 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <opencv2/calib3d.hpp>
 #include <random>
 
+#include "rgbdmap/base/kinect_noise.hpp"
+#include "rgbdmap/capture/lens_undistortion.hpp"
+
 namespace rgbdmap {
-namespace {
-
-// The Kinect's axial depth noise (Khoshelham and Elberink 2012), as the map weighs depth.
-double depthSigma(double z) { return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4); }
-
-}  // namespace
 
 KeyframeFloor::KeyframeFloor(const CameraIntrinsics& camera, double min_depth, double max_depth,
                              const Config& config)
@@ -24,7 +20,7 @@ KeyframeFloor::KeyframeFloor(const CameraIntrinsics& camera, double min_depth, d
   config_.stride = std::max(1, config_.stride);
   config_.normal_step = std::max(1, config_.normal_step);
   const int step = config_.normal_step;
-  std::vector<cv::Point2d> pixels;
+  std::vector<cv::Point2f> pixels;
   for (int v = config_.stride / 2; v + step < height_; v += config_.stride) {
     for (int u = config_.stride / 2; u + step < width_; u += config_.stride) {
       pixels.emplace_back(u, v);
@@ -32,15 +28,8 @@ KeyframeFloor::KeyframeFloor(const CameraIntrinsics& camera, double min_depth, d
       pixels.emplace_back(u, v + step);
     }
   }
-  std::vector<cv::Point2d> undistorted(pixels.size());
-  if (camera.hasDistortion() && !pixels.empty()) {
-    cv::undistortPoints(pixels, undistorted, cv::Mat(camera.cameraMatrix()),
-                        cv::Mat(camera.distortion()));
-  } else {
-    for (std::size_t i = 0; i < pixels.size(); ++i)
-      undistorted[i] = {(pixels[i].x - camera.cx) / camera.fx,
-                        (pixels[i].y - camera.cy) / camera.fy};
-  }
+  std::vector<cv::Point2f> undistorted;
+  if (!pixels.empty()) LensUndistortion::rays(camera, pixels, undistorted);
   rays_.reserve(pixels.size() / 3);
   for (std::size_t i = 0; i + 2 < pixels.size(); i += 3) {
     rays_.push_back({static_cast<int>(pixels[i].x),
@@ -68,7 +57,7 @@ std::vector<KeyframeFloor::Sample> KeyframeFloor::samples(const cv::Mat& depth) 
     const Eigen::Vector3d p = point(r.at, z);
     const Eigen::Vector3d normal = (point(r.right, z_right) - p).cross(point(r.down, z_down) - p);
     if (normal.norm() <= 0.0) continue;
-    out.push_back({p, normal.normalized(), depthSigma(z)});
+    out.push_back({p, normal.normalized(), kinectDepthSigma(static_cast<float>(z))});
   }
   return out;
 }
