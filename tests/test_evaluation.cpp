@@ -301,6 +301,12 @@ TEST(EvaluateCommand, ReportsBadInputWithTheFileNameAndFails) {
                       &output),
             0);
   EXPECT_NE(output.find(dir + "/estimate.txt:2"), std::string::npos) << output;
+  // An alignment the command does not know is named, not guessed.
+  EXPECT_NE(test::run(test::binary() + " evaluate map " + dir + "/none.pcd --scene " + dir +
+                          " --trajectory " + dir + "/gt.txt --align sideways",
+                      &output),
+            0);
+  EXPECT_NE(output.find("--align"), std::string::npos) << output;
 }
 
 TEST(EvaluateCommand, TrajectoryTableAndJson) {
