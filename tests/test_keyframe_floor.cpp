@@ -69,7 +69,7 @@ double degreesBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 TEST(KeyframeFloor, DiscoversTheFloorNotTheTableAbove) {
   const CameraIntrinsics camera;
-  const KeyframeFloor finder(camera, 0.3, 4.0, KeyframeFloor::Config{});
+  KeyframeFloor finder(camera, 0.3, 4.0, KeyframeFloor::Config{});
   for (const auto& [pitch, roll] : {std::pair{0.35, 0.0}, std::pair{0.25, 0.1}}) {
     const Eigen::Isometry3d pose = cameraPose(pitch, roll);
     const cv::Mat depth = render(camera, pose, true, 3);
@@ -85,7 +85,7 @@ TEST(KeyframeFloor, DiscoversTheFloorNotTheTableAbove) {
 
 TEST(KeyframeFloor, RefitsAGuessThatIsOffByCentimetresAndADegree) {
   const CameraIntrinsics camera;
-  const KeyframeFloor finder(camera, 0.3, 4.0, KeyframeFloor::Config{});
+  KeyframeFloor finder(camera, 0.3, 4.0, KeyframeFloor::Config{});
   const Eigen::Isometry3d pose = cameraPose(0.3, 0.05);
   const cv::Mat depth = render(camera, pose, false, 5);
   const CameraPlane truth = floorIn(pose);
@@ -100,7 +100,7 @@ TEST(KeyframeFloor, RefitsAGuessThatIsOffByCentimetresAndADegree) {
 
 TEST(KeyframeFloor, NoFloorWhereTheViewShowsNone) {
   const CameraIntrinsics camera;
-  const KeyframeFloor finder(camera, 0.3, 4.0, KeyframeFloor::Config{});
+  KeyframeFloor finder(camera, 0.3, 4.0, KeyframeFloor::Config{});
   // Looking up at the wall: no floor in view.
   const Eigen::Isometry3d pose = cameraPose(-0.45, 0.0);
   const cv::Mat depth = render(camera, pose, false, 7);

@@ -33,7 +33,7 @@ std::shared_ptr<const PlaceRecognition::Place> moved(const PlaceRecognition::Pla
 
 TEST(PlaceMatcher, FindsWhereTheSameSpotWasSeenFrom) {
   const Session& s = rpySession();
-  const PlaceMatcher matcher(s.camera, TrackingOptions{}, LoopOptions{});
+  PlaceMatcher matcher(s.camera, TrackingOptions{}, LoopOptions{});
   Eigen::Isometry3f motion = Eigen::Isometry3f::Identity();
   motion.linear() =
       Eigen::AngleAxisf(0.05f, Eigen::Vector3f(0.3f, 1.0f, 0.2f).normalized()).toRotationMatrix();
@@ -71,7 +71,7 @@ TEST(PlaceMatcher, ADifferentViewIsNotMatched) {
   // The same place upside down and moved 3 m: its features no longer fit the other's geometry.
   auto moved = std::make_shared<PlaceRecognition::Place>(*s.graph.places[ids[0]]);
   for (cv::Point3f& p : moved->view.points) p = cv::Point3f(-p.x, -p.y, p.z + 3.0f);
-  const PlaceMatcher matcher(s.camera, TrackingOptions{}, LoopOptions{});
+  PlaceMatcher matcher(s.camera, TrackingOptions{}, LoopOptions{});
   EXPECT_FALSE(matcher.match(*s.graph.places[ids[0]], *moved));
   EXPECT_EQ(matcher.similarity(*s.graph.places[ids[0]], *moved),
             matcher.similarity(*s.graph.places[ids[0]], *s.graph.places[ids[0]]));

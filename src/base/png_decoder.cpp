@@ -9,6 +9,8 @@
 #include <opencv2/core.hpp>
 #include <optional>
 
+#include "rgbdmap/base/png_paeth.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -127,16 +129,6 @@ bool validDepthForType(int bit_depth, int colour_type) {
 
 enum Filter : std::uint8_t { kNone = 0, kSub = 1, kUp = 2, kAverage = 3, kPaeth = 4 };
 
-// Branch-free so that the compiler emits conditional moves: photos make the choice between
-// the three neighbours unpredictable.
-inline int paeth(int a, int b, int c) {
-  const int pa = std::abs(b - c);
-  const int pb = std::abs(a - c);
-  const int pc = std::abs(a + b - 2 * c);
-  const int nearer = pa <= pb ? a : b;
-  return std::min(pa, pb) <= pc ? nearer : c;
-}
-
 // Sub, Average and Paeth predict each byte from the byte one pixel to the left, a serial chain
 // that no vector unit shortens. The left and upper-left pixels are carried in registers (a
 // reload of the byte just stored would wait on store forwarding), and the finished pixel is
@@ -171,7 +163,7 @@ void decodeRow(std::uint8_t filter, std::uint8_t* row, const std::uint8_t* prior
                                     [](int a, int b, int) { return (a + b) >> 1; });
     case kPaeth:
       return unfilterPixels<Format>(row, prior, width, out,
-                                    [](int a, int b, int c) { return paeth(a, b, c); });
+                                    [](int a, int b, int c) { return pngPaeth(a, b, c); });
     case kUp:  // no chain: a plain loop the compiler vectorises
       for (std::size_t i = 0; i < width * kBytes; ++i)
         row[i] = static_cast<std::uint8_t>(row[i] + prior[i]);

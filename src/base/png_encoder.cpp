@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "rgbdmap/base/png_paeth.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -25,13 +27,6 @@ void putChunk(std::vector<std::uint8_t>& out, const char (&type)[5], const std::
   out.insert(out.end(), data, data + size);
   const std::uint32_t crc = libdeflate_crc32(0, out.data() + type_at, size + 4);
   putBigEndian(out, crc);
-}
-
-std::uint8_t paeth(int a, int b, int c) {
-  const int p = a + b - c;
-  const int pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
-  if (pa <= pb && pa <= pc) return static_cast<std::uint8_t>(a);
-  return static_cast<std::uint8_t>(pb <= pc ? b : c);
 }
 
 // Sum of the filtered bytes taken as signed: small when the filter predicted the row well.
@@ -100,6 +95,33 @@ void toPngSamples(const cv::Mat& image, std::size_t row_bytes, std::vector<std::
   }
 }
 
+// The five filters' outputs for one row, one after another in `out` (5 * n bytes). The pointers
+// never alias: saying so lets the loop vectorise.
+void predictRow(const std::uint8_t* __restrict row, const std::uint8_t* __restrict up,
+                std::size_t n, std::size_t bpp, std::uint8_t* __restrict out) {
+  std::uint8_t* __restrict none = out;
+  std::uint8_t* __restrict sub = out + n;
+  std::uint8_t* __restrict above = out + 2 * n;
+  std::uint8_t* __restrict average = out + 3 * n;
+  std::uint8_t* __restrict best_guess = out + 4 * n;
+  // The first pixel has no left neighbour; without that test the rest vectorises.
+  const std::size_t first = std::min(bpp, n);
+  for (std::size_t i = 0; i < first; ++i) {
+    none[i] = sub[i] = row[i];
+    above[i] = static_cast<std::uint8_t>(row[i] - up[i]);
+    average[i] = static_cast<std::uint8_t>(row[i] - (up[i] >> 1));
+    best_guess[i] = static_cast<std::uint8_t>(row[i] - up[i]);  // Paeth of (0, b, 0) is b
+  }
+  for (std::size_t i = first; i < n; ++i) {
+    const int a = row[i - bpp], b = up[i], c = up[i - bpp];
+    none[i] = row[i];
+    sub[i] = static_cast<std::uint8_t>(row[i] - a);
+    above[i] = static_cast<std::uint8_t>(row[i] - b);
+    average[i] = static_cast<std::uint8_t>(row[i] - ((a + b) >> 1));
+    best_guess[i] = static_cast<std::uint8_t>(row[i] - pngPaeth(a, b, c));
+  }
+}
+
 // Filters: each row of `raw` takes the one (None, Sub, Up, Average, Paeth) whose output costs
 // least, written after its filter byte to `filtered`. `bpp`: bytes back to the corresponding byte
 // of the left pixel; `candidate`: room for the five filters' rows.
@@ -112,21 +134,7 @@ void filterRows(const std::vector<std::uint8_t>& raw, std::size_t row_bytes, std
   for (std::size_t v = 0; v < rows; ++v) {
     const std::uint8_t* row = raw.data() + v * row_bytes;
     const std::uint8_t* up = v == 0 ? zero.data() : row - row_bytes;
-    std::uint8_t* none = candidate.data();
-    std::uint8_t* sub = none + row_bytes;
-    std::uint8_t* above = sub + row_bytes;
-    std::uint8_t* average = above + row_bytes;
-    std::uint8_t* best_guess = average + row_bytes;
-    for (std::size_t i = 0; i < row_bytes; ++i) {
-      const int a = i >= bpp ? row[i - bpp] : 0;
-      const int b = up[i];
-      const int c = i >= bpp ? up[i - bpp] : 0;
-      none[i] = row[i];
-      sub[i] = static_cast<std::uint8_t>(row[i] - a);
-      above[i] = static_cast<std::uint8_t>(row[i] - b);
-      average[i] = static_cast<std::uint8_t>(row[i] - ((a + b) >> 1));
-      best_guess[i] = static_cast<std::uint8_t>(row[i] - paeth(a, b, c));
-    }
+    predictRow(row, up, row_bytes, bpp, candidate.data());
     int best = 0;
     std::uint64_t best_cost = UINT64_MAX;
     for (int f = 0; f < 5; ++f) {

@@ -138,13 +138,14 @@ KeyframeStore::Entry KeyframeStore::encode(const Frame& frame, const Eigen::Isom
   e.anchor = frame.anchor;
   e.pose = frame.pose;
   e.fused_at = fused_at;
-  cv::divide(kInverseDepthUnits, frame.depth, units_, CV_32F);  // 0 -> inf
-  units_.setTo(0.0f, units_ > 65535.0f);
-  units_.convertTo(units_, CV_16U);  // rounded
+  // Each buffer keeps its type from frame to frame, so none is allocated again.
+  cv::divide(kInverseDepthUnits, frame.depth, inverse_, CV_32F);           // 0 -> inf
+  cv::threshold(inverse_, inverse_, 65535.0, 0.0, cv::THRESH_TOZERO_INV);  // beyond 16 bits -> 0
+  inverse_.convertTo(units_, CV_16U);                                      // rounded
   cv::resize(frame.color, half_, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
   // Rounded to the nearest kept level (a multiple of 4), saturating at 252.
   half_.convertTo(half_, CV_8UC3, 1.0 / (1 << kColourBitsDropped));
-  half_.setTo(cv::Scalar::all(255 >> kColourBitsDropped), half_ > (255 >> kColourBitsDropped));
+  cv::min(half_, cv::Scalar::all(255 >> kColourBitsDropped), half_);
   std::string error;
   std::vector<std::uint8_t> depth_png, colour_png;
   if (!encoder_.encode(units_, depth_png, error) || !encoder_.encode(half_, colour_png, error))

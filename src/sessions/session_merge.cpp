@@ -144,7 +144,7 @@ std::vector<SessionMerger::Match> SessionMerger::findPlaceMatches(const Session&
                                                                   std::size_t& compared) const {
   PlaceComparisons own;  // none kept: this merge's only
   PlaceComparisons& results = comparisons ? *comparisons : own;
-  const PlaceMatcher matcher(session.camera, settings_.tracking, settings_.loop);
+  PlaceMatcher matcher(session.camera, settings_.tracking, settings_.loop);
   std::vector<int> everywhere, queries;
   for (std::size_t id = 0; id < merged.graph.places.size(); ++id)
     if (merged.graph.places[id]) everywhere.push_back(static_cast<int>(id));

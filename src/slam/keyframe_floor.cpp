@@ -40,8 +40,9 @@ KeyframeFloor::KeyframeFloor(const CameraIntrinsics& camera, double min_depth, d
   }
 }
 
-std::vector<KeyframeFloor::Sample> KeyframeFloor::samples(const cv::Mat& depth) const {
-  std::vector<Sample> out;
+const std::vector<KeyframeFloor::Sample>& KeyframeFloor::samples(const cv::Mat& depth) {
+  std::vector<Sample>& out = samples_;
+  out.clear();
   if (depth.type() != CV_32FC1 || depth.cols != width_ || depth.rows != height_) return out;
   out.reserve(rays_.size());
   const int step = config_.normal_step;
@@ -117,8 +118,7 @@ std::optional<CameraPlane> KeyframeFloor::settle(const std::vector<Sample>& samp
   return plane;
 }
 
-std::optional<CameraPlane> KeyframeFloor::near(const cv::Mat& depth,
-                                               const CameraPlane& guess) const {
+std::optional<CameraPlane> KeyframeFloor::near(const cv::Mat& depth, const CameraPlane& guess) {
   const std::optional<CameraPlane> found = settle(samples(depth), guess);
   if (!found ||
       std::acos(std::clamp(found->normal.dot(guess.normal), -1.0, 1.0)) > config_.max_tilt)
@@ -127,8 +127,8 @@ std::optional<CameraPlane> KeyframeFloor::near(const cv::Mat& depth,
 }
 
 std::optional<CameraPlane> KeyframeFloor::discover(const cv::Mat& depth,
-                                                   const Eigen::Vector3d& up) const {
-  const std::vector<Sample> all = samples(depth);
+                                                   const Eigen::Vector3d& up) {
+  const std::vector<Sample>& all = samples(depth);
   if (all.size() < 3) return std::nullopt;
   const Eigen::Vector3d u = up.normalized();
   const double min_cos = std::cos(config_.max_discovery_tilt);

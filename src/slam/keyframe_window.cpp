@@ -68,12 +68,17 @@ std::vector<LoopMeasurement> KeyframeWindow::add(
     m.later = id;
     measured.push_back(m);
   }
+  // The entry that leaves the window lends its buffers to the one that comes in (megabytes that
+  // the kernel would otherwise zero again at every keyframe).
   Entry entry;
+  while (static_cast<int>(entries_.size()) >= options_.window_keyframes) {
+    entry = std::move(entries_.front());
+    entries_.pop_front();
+  }
   entry.id = id;
   entry.reference.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,
                         static_cast<float>(tracking_.min_gradient));
   entries_.push_back(std::move(entry));
-  while (static_cast<int>(entries_.size()) > options_.window_keyframes) entries_.pop_front();
   return measured;
 }
 

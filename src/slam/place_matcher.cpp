@@ -130,7 +130,7 @@ int PlaceMatcher::similarity(const PlaceRecognition::Place& a,
 }
 
 std::optional<LoopMeasurement> PlaceMatcher::match(const PlaceRecognition::Place& candidate,
-                                                   const PlaceRecognition::Place& query) const {
+                                                   const PlaceRecognition::Place& query) {
   std::vector<cv::DMatch> matches;
   ratioMatches(candidate.view.descriptors, query.view.descriptors, matches);
   if (static_cast<int>(matches.size()) < loop_.min_matches) return std::nullopt;

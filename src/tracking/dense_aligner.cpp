@@ -14,12 +14,7 @@ using Vector6f = Eigen::Matrix<float, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-// One warped keyframe point: residuals and their Jacobians with respect to a left increment
-// (translation, rotation) of the motion. A missing depth residual has rz = NaN.
-struct Residual {
-  Vector6f ji, jz;
-  float ri, rz;
-};
+using Residual = DenseAligner::Residual;
 
 // Jacobian row of a residual whose gradient with respect to the warped point p is g:
 // (g, p x g) for a left increment (translation, rotation). Scalar code: gcc's array-bounds
@@ -170,8 +165,7 @@ void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coar
 }
 
 AlignmentResult DenseAligner::align(const AlignmentReference& reference,
-                                    const ImagePyramid& current,
-                                    const Eigen::Isometry3d& guess) const {
+                                    const ImagePyramid& current, const Eigen::Isometry3d& guess) {
   AlignmentResult result;
   Eigen::Isometry3d motion = guess;
   const int finest = options_.finest_level;
@@ -179,8 +173,9 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   const float k = static_cast<float>(options_.huber_k);
   const float depth_weight = static_cast<float>(options_.depth_weight);
   const bool quadratic_noise = options_.depth_noise == "quadratic";
-  std::vector<Residual> residuals;
-  std::vector<float> abs_i, abs_z;
+  std::vector<Residual>& residuals = residuals_;
+  std::vector<float>& abs_i = abs_i_;
+  std::vector<float>& abs_z = abs_z_;
   float sigma_i = 10.0f, sigma_z = 0.02f;
 
   for (int l = coarsest; l >= finest; --l) {

@@ -55,8 +55,10 @@ class KeyframeFloor {
   KeyframeFloor(const CameraIntrinsics& camera, double min_depth, double max_depth,
                 const Config& config);
 
-  std::optional<CameraPlane> near(const cv::Mat& depth, const CameraPlane& guess) const;
-  std::optional<CameraPlane> discover(const cv::Mat& depth, const Eigen::Vector3d& up) const;
+  // Not const: both reuse one buffer of samples (megabytes a keyframe, zeroed by the kernel
+  // when allocated afresh).
+  std::optional<CameraPlane> near(const cv::Mat& depth, const CameraPlane& guess);
+  std::optional<CameraPlane> discover(const cv::Mat& depth, const Eigen::Vector3d& up);
 
  private:
   struct Sample {
@@ -64,7 +66,8 @@ class KeyframeFloor {
     Eigen::Vector3d normal;  // unit; its sign is arbitrary
     double sigma;            // of its depth
   };
-  std::vector<Sample> samples(const cv::Mat& depth) const;
+  // The samples of `depth` into samples_.
+  const std::vector<Sample>& samples(const cv::Mat& depth);
   bool fits(const Sample& s, const CameraPlane& plane, double band) const;
   // Least squares (weights 1 / sigma(z)^2) through the samples that fit `plane` within band,
   // normal on plane's side; none when too few samples or too narrow a spread.
@@ -81,6 +84,7 @@ class KeyframeFloor {
     Eigen::Vector2d at, right, down;
   };
   std::vector<Rays> rays_;
+  std::vector<Sample> samples_;
 };
 
 }  // namespace rgbdmap

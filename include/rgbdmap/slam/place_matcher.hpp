@@ -29,7 +29,7 @@ class PlaceMatcher {
   // information of the alignment per pixel, as loops within a run), or none; ids are left to the
   // caller.
   std::optional<LoopMeasurement> match(const PlaceRecognition::Place& candidate,
-                                       const PlaceRecognition::Place& query) const;
+                                       const PlaceRecognition::Place& query);
 
  private:
   CameraIntrinsics camera_;

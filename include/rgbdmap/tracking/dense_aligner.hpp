@@ -44,12 +44,23 @@ struct AlignmentResult {
 // from the interleaved samples the pyramid precomputes, so one lookup per point and step.
 class DenseAligner {
  public:
+  // One warped keyframe point: residuals and their Jacobians with respect to a left increment
+  // (translation, rotation) of the motion. A missing depth residual has rz = NaN.
+  struct Residual {
+    Eigen::Matrix<float, 6, 1> ji, jz;
+    float ri, rz;
+  };
+
   explicit DenseAligner(const TrackingOptions& options) : options_(options) {}
   AlignmentResult align(const AlignmentReference& reference, const ImagePyramid& current,
-                        const Eigen::Isometry3d& guess) const;
+                        const Eigen::Isometry3d& guess);
 
  private:
   TrackingOptions options_;
+  // Kept from call to call: megabytes that, allocated afresh for every alignment, the kernel
+  // zeroed page by page (half of a replay's page faults).
+  std::vector<Residual> residuals_;
+  std::vector<float> abs_i_, abs_z_;
 };
 
 }  // namespace rgbdmap
