@@ -15,15 +15,14 @@ FusionThread::FusionThread(Mapper& mapper, std::size_t slots, int width, int hei
 
 FusionThread::~FusionThread() { finish(); }
 
-bool FusionThread::submit(const Frame& keyframe, bool wait,
-                          std::optional<PoseCorrections::Snapshot> at) {
+bool FusionThread::submit(const Frame& keyframe, bool wait, Settled at) {
   Frame* slot = wait ? keyframes_.acquire() : keyframes_.tryAcquire();
   if (!slot) return false;
   copyFrame(keyframe, *slot);
   if (at) {
     follows_while_idle_.store(false);
     std::lock_guard<std::mutex> lock(pinned_mutex_);
-    pinned_[slot] = std::move(*at);
+    pinned_[slot] = std::move(at);
   }
   keyframes_.push(slot);
   return true;
@@ -63,15 +62,17 @@ void FusionThread::run() {
     if (keyframe) {
       // After a failure the remaining keyframes are drained unfused: the map stays as it was.
       if (!failed) {
-        std::optional<PoseCorrections::Snapshot> at;
+        Settled settled;
         {
           std::lock_guard<std::mutex> lock(pinned_mutex_);
           if (auto it = pinned_.find(keyframe); it != pinned_.end()) {
-            at = std::move(it->second);
+            settled = std::move(it->second);
             pinned_.erase(it);
           }
         }
         try {
+          std::optional<PoseCorrections::Snapshot> at;
+          if (settled) at = settled();  // may wait for the loop thread, holding no lock
           mapper_.fuse(*keyframe, at ? &*at : nullptr);
         } catch (const std::exception& e) {
           failed = true;

@@ -315,9 +315,10 @@ int Pipeline::run(RunControl& control) {
   if (!live && loop.loop_closer) {
     // The local window moves the newest keyframes at every keyframe: fused at whatever the loop
     // thread had reached, a replay's map would differ from run to run.
-    parts.settled_corrections = [&loop] {
-      loop.loop_closer->waitUntilIdle();
-      return loop.corrections->snapshot();
+    parts.settled_corrections = [&loop]() -> FusionThread::Settled {
+      LoopCloser* closer = loop.loop_closer.get();
+      const std::uint64_t added = closer->keyframesAdded();
+      return [closer, added] { return closer->settledAfter(added); };
     };
   }
   TrackingThread tracking(parts, !live, config.checkpoint, checkpoint, stats_, control, fail);

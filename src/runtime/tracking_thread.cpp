@@ -64,7 +64,7 @@ void TrackingThread::track(Frame& frame) {
   try {
     bool keyframe = false;
     if (parts_.tracker.track(frame)) {
-      std::optional<PoseCorrections::Snapshot> at;
+      FusionThread::Settled at;
       if (parts_.settled_corrections) at = parts_.settled_corrections();
       keyframe = parts_.fusion.submit(frame, wait_for_fusion_, std::move(at));
       if (keyframe) {

@@ -94,6 +94,7 @@ void LoopCloser::addKeyframe(TrackedKeyframe keyframe) {
     }
   }
   queue_.push_back(std::move(keyframe));
+  ++added_;
   changed_.notify_all();
 }
 
@@ -126,6 +127,11 @@ void LoopCloser::readGraph(const std::function<void(const GraphView&)>& read) co
 void LoopCloser::run() {
   // Loop closure improves what tracking and fusion do; when two cores are short, they come first.
   giveWayToTracking();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (lossless_) settled_.push_back(corrections_.snapshot());  // before any keyframe
+  }
+  changed_.notify_all();
   bool failed = false;
   for (;;) {
     TrackedKeyframe keyframe;
@@ -135,7 +141,6 @@ void LoopCloser::run() {
       if (queue_.empty()) break;
       keyframe = std::move(queue_.front());
       queue_.pop_front();
-      processing_ = true;
     }
     changed_.notify_all();
     const auto start = std::chrono::steady_clock::now();
@@ -149,15 +154,32 @@ void LoopCloser::run() {
     stats_.loop_latency.record(secondsSince(start));
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      processing_ = false;
+      if (lossless_) settled_.push_back(corrections_.snapshot());
     }
     changed_.notify_all();
   }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ended_ = true;
+  }
+  changed_.notify_all();
 }
 
-void LoopCloser::waitUntilIdle() {
+std::uint64_t LoopCloser::keyframesAdded() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return added_;
+}
+
+PoseCorrections::Snapshot LoopCloser::settledAfter(std::uint64_t added) {
   std::unique_lock<std::mutex> lock(mutex_);
-  changed_.wait(lock, [&] { return queue_.empty() && !processing_; });
+  changed_.wait(lock, [&] { return settled_first_ + settled_.size() > added || ended_; });
+  if (added < settled_first_ || added >= settled_first_ + settled_.size())
+    return corrections_.snapshot();  // the thread has stopped (or a state long let go)
+  while (settled_first_ < added) {
+    settled_.pop_front();
+    ++settled_first_;
+  }
+  return settled_.front();
 }
 
 PoseGraph::Edge LoopCloser::edgeOf(int from, int to, const Eigen::Isometry3d& measurement,

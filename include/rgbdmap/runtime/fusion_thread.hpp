@@ -30,6 +30,9 @@ class FusionThread {
  public:
   using ErrorHandler = std::function<void(const std::string&)>;
   using MapTask = std::function<void(const Mapper&)>;
+  // Gives the corrections a keyframe is fused at; called on the fusion thread when the keyframe's
+  // turn comes, and may wait there.
+  using Settled = std::function<PoseCorrections::Snapshot()>;
 
   // `slots`: keyframes that may wait for fusion (plus the one being fused); images are
   // width x height.
@@ -42,8 +45,7 @@ class FusionThread {
   // `at`: the corrections to fuse it at (a lossless replay's, see Mapper::fuse); a fusion thread
   // given them does not follow loops while idle either (how much it did would depend on timing),
   // only a few kept keyframes per keyframe fused (RefusionOptions::refusion_pace).
-  bool submit(const Frame& keyframe, bool wait,
-              std::optional<PoseCorrections::Snapshot> at = std::nullopt);
+  bool submit(const Frame& keyframe, bool wait, Settled at = nullptr);
   // Runs `task` on the fusion thread with the map between two keyframes (e.g. to take a
   // checkpoint snapshot). A request not yet served is replaced by a newer one of the same kind.
   void request(MapRequest kind, MapTask task);
@@ -63,7 +65,7 @@ class FusionThread {
   std::array<MapTask, 2> pending_;  // by MapRequest
   std::atomic<bool> requested_{false};
   std::mutex pinned_mutex_;
-  std::unordered_map<const Frame*, PoseCorrections::Snapshot> pinned_;  // by queued slot
+  std::unordered_map<const Frame*, Settled> pinned_;  // by queued slot
   std::atomic<bool> follows_while_idle_{true};
   std::thread thread_;
 };

@@ -37,10 +37,11 @@ class TrackingThread {
     // Localising or continuing: every posed frame's anchor, to count those before the saved map
     // was recognised (null: neither).
     FramesBeforePlacement* before_placement = nullptr;
-    // A lossless replay with loop closure: waits until the loop thread has taken in every
-    // keyframe so far and gives the corrections then, which a keyframe is fused at (null: the
-    // fusion thread takes the latest when it gets to the keyframe).
-    std::function<PoseCorrections::Snapshot()> settled_corrections = nullptr;
+    // A lossless replay with loop closure: called as a keyframe is handed to fusion, it says
+    // which corrections the keyframe is to be fused at (those once the loop thread has taken in
+    // every keyframe before it), for the fusion thread to fetch, and wait for, when it gets to
+    // the keyframe; tracking goes on meanwhile (null: fused at the latest).
+    std::function<FusionThread::Settled()> settled_corrections = nullptr;
   };
 
   // Starts the thread. `wait_for_fusion`: a keyframe waits for a fusion slot (a lossless replay,

@@ -75,10 +75,13 @@ class LoopCloser : public KeyframeSink {
   std::uint64_t firstKeyframeId() const override { return static_cast<std::uint64_t>(first_own_); }
   // Processes every queued keyframe, then stops the thread. The corrections are final after it.
   void finish();
-  // Returns once every keyframe added so far has been taken into the graph (its window, loops
-  // and corrections published): what a lossless replay fuses at, so that its map does not depend
-  // on how far the loop thread had got.
-  void waitUntilIdle();
+  // How many keyframes addKeyframe() has been given so far.
+  std::uint64_t keyframesAdded();
+  // The corrections as they were once the first `added` keyframes had been taken into the graph
+  // (their window, loops and corrections published), waiting for that if need be: what a
+  // lossless replay fuses a keyframe at, so that its map does not depend on how far the loop
+  // thread had got. Asked in increasing order (older states are let go); from any thread.
+  PoseCorrections::Snapshot settledAfter(std::uint64_t added);
   // Calls `read` with the graph as it is now, from any thread: the loop thread waits while it
   // runs, and it waits at most for one optimisation. A session streams the graph to its file
   // this way (a copy of a long run's graph is megabytes, at every checkpoint).
@@ -159,8 +162,13 @@ class LoopCloser : public KeyframeSink {
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<TrackedKeyframe> queue_;
-  bool processing_ = false;  // a keyframe taken from the queue is being processed
   bool finishing_ = false;
+  bool ended_ = false;  // the loop thread has stopped
+  std::uint64_t added_ = 0;
+  // Lossless only: settled_[i], the corrections once settled_first_ + i keyframes had been
+  // processed (as many as the fusion thread is behind the loop thread; live, none is kept).
+  std::deque<PoseCorrections::Snapshot> settled_;
+  std::uint64_t settled_first_ = 0;
   std::thread thread_;
 };
 
