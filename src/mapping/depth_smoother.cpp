@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "rgbdmap/base/kinect_noise.hpp"
 #include "rgbdmap/base/vector_clones.hpp"
 
 namespace rgbdmap {
@@ -48,6 +49,7 @@ RGBDMAP_VECTOR_CLONES void DepthSmoother::apply(cv::Mat& depth, Buffers& buffers
   const float min_count =
       static_cast<float>(min_valid_fraction) * static_cast<float>((2 * r + 1) * (2 * r + 1));
   const float range = static_cast<float>(max_relative_range);
+  const float noise = static_cast<float>(noise_sigmas);
   const float fallback = drop_unsmoothed ? 0.0f : 1.0f;
   for (int v = 0; v < rows; ++v) {
     const int first = std::max(0, v - r), last = std::min(rows - 1, v + r);
@@ -89,7 +91,9 @@ RGBDMAP_VECTOR_CLONES void DepthSmoother::apply(cv::Mat& depth, Buffers& buffers
       // inverse depths, inverted, is count / sum.
       const float measured = measured_row[u], smoothed = count[u] / sum[u];
       const bool enough = count[u] >= min_count;
-      const bool flat = high[u] - low[u] <= range * measured;
+      const float d = measured - KinectNoise::kFrom;
+      const float sigma = KinectNoise::kBase + KinectNoise::kGrowth * d * d;
+      const bool flat = high[u] - low[u] <= range * measured + noise * sigma;
       out[u] = ((measured > 0.0f) & enough & flat) ? smoothed : fallback * measured;
     }
   }

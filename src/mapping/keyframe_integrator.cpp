@@ -31,7 +31,7 @@ KeyframeIntegrator::KeyframeIntegrator(const CameraIntrinsics& camera, const Fil
                                        const MapOptions& map, int threads)
     : filter_(filter),
       // Fusion averages many views of each surface, so unsmoothable pixels are dropped.
-      smoother_{filter.smooth_radius, filter.edge_jump, 0.75, true},
+      smoother_{filter.smooth_radius, filter.smooth_range, 0.75, filter.smooth_noise_sigmas, true},
       tsdf_(makeTsdf(camera, filter, map)),
       pool_(threads),
       statistical_(filter.outliers == "statistical"),

@@ -35,6 +35,12 @@ Keys filterKeys(FilterOptions& o) {
               "fuse every 2nd pixel of each row and column where 2 pixels span under half a voxel"),
       integer("filter.smooth_radius", &o.smooth_radius, 0, 10,
               "half-size of the edge-aware inverse-depth averaging window (0 = off)"),
+      number("filter.smooth_range", &o.smooth_range, 0.001, 1,
+             "a smoothing window whose depth spread is over this share of its depth (plus "
+             "filter.smooth_noise_sigmas) straddles an edge: its pixel is not fused"),
+      number("filter.smooth_noise_sigmas", &o.smooth_noise_sigmas, 0, 20,
+             "depth noise sigmas (Kinect model) a smoothing window's spread may have besides "
+             "filter.smooth_range"),
       integer("filter.sor_mean_k", &o.sor_mean_k, 1, 1000,
               "statistical outlier removal: neighbours"),
       number("filter.sor_stddev", &o.sor_stddev, 0, 100, "statistical outlier removal: sigma"),

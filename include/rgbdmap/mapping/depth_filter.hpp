@@ -24,6 +24,13 @@ struct FilterOptions {
   int speck_min_neighbours = 4;   // of 8, with similar depth
   bool subsample = true;          // every 2nd pixel where 2 pixels < half a voxel
   int smooth_radius = 2;          // inverse-depth averaging window, 0 = off
+  // A smoothing window is one surface when its depth spread is within smooth_range * depth plus
+  // smooth_noise_sigmas * sigma(depth); fusion drops a pixel whose window is not. The noise term
+  // is what lets far surfaces in: 25 samples of a Kinect's noise alone spread about 4 sigma, more
+  // than 3% of the depth beyond 3 m, so floors and upper walls seen from afar were never fused
+  // (the 30 x 20 m floor's recall 0.924 -> 0.972, precision 0.9961 -> 0.9960; docs/benchmarks.md).
+  double smooth_range = 0.03;
+  double smooth_noise_sigmas = 4.0;
   int sor_mean_k = 50;
   double sor_stddev = 1.0;
 };

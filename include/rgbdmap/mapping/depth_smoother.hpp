@@ -15,6 +15,9 @@ struct DepthSmoother {
   int radius = 2;                    // window (2r+1)^2; 0 disables smoothing
   double max_relative_range = 0.03;  // depth spread in the window allowed, relative to depth
   double min_valid_fraction = 0.75;  // share of window pixels that must have depth
+  // Allowed besides max_relative_range * depth: this many sigmas of the sensor's depth noise
+  // (KinectNoise), so that the noise of far pixels alone does not mark their windows as edges.
+  double noise_sigmas = 0.0;
   // Pixels that cannot be smoothed (edges, sparse windows) keep their measurement by default.
   // Dropping them instead keeps the raw noise (25x the variance) out of a fused map, where
   // its tails would become isolated points 1-2 cm off the surfaces; other views fill in.
