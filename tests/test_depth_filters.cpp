@@ -20,6 +20,18 @@ cv::Mat planeDepth(const Eigen::Vector3d& n, double d, int w = 64, int h = 48) {
   return depth;
 }
 
+// `depth` with the Kinect's axial noise at each pixel's depth (kinectDepthSigma).
+cv::Mat withKinectNoise(const cv::Mat& depth, unsigned seed) {
+  std::mt19937 rng(seed);
+  cv::Mat noisy = depth.clone();
+  for (int v = 0; v < noisy.rows; ++v)
+    for (int u = 0; u < noisy.cols; ++u) {
+      std::normal_distribution<float> noise(0.0f, kinectDepthSigma(noisy.at<float>(v, u)));
+      noisy.at<float>(v, u) += noise(rng);
+    }
+  return noisy;
+}
+
 TEST(DepthFilter, RangeDropsNearFarAndNan) {
   cv::Mat depth(4, 4, CV_32FC1, cv::Scalar(1.0f));
   depth.at<float>(0, 0) = 0.1f;
@@ -77,13 +89,7 @@ TEST(DepthSmoother, ExactOnPlanesAndReducesNoise) {
     for (int u = 2; u < exact.cols - 2; ++u)
       EXPECT_NEAR(smoothed.at<float>(v, u), exact.at<float>(v, u), 2e-5f) << u << "," << v;
 
-  std::mt19937 rng(1);
-  cv::Mat noisy = exact.clone();
-  for (int v = 0; v < noisy.rows; ++v)
-    for (int u = 0; u < noisy.cols; ++u) {
-      std::normal_distribution<float> noise(0.0f, kinectDepthSigma(noisy.at<float>(v, u)));
-      noisy.at<float>(v, u) += noise(rng);
-    }
+  const cv::Mat noisy = withKinectNoise(exact, 1);
   cv::Mat denoised = noisy.clone();
   s.apply(denoised, buffers);
   double before = 0, after = 0;
@@ -103,13 +109,7 @@ TEST(DepthSmoother, ExactOnPlanesAndReducesNoise) {
 TEST(DepthSmoother, KeepsFarNoisySlopesWhenItAllowsForTheNoise) {
   const Eigen::Vector3d n = Eigen::Vector3d(0.0, -0.866, -0.5).normalized();
   const cv::Mat exact = planeDepth(n, -2.0);  // 4 m at the centre
-  std::mt19937 rng(3);
-  cv::Mat noisy = exact.clone();
-  for (int v = 0; v < noisy.rows; ++v)
-    for (int u = 0; u < noisy.cols; ++u) {
-      std::normal_distribution<float> noise(0.0f, kinectDepthSigma(noisy.at<float>(v, u)));
-      noisy.at<float>(v, u) += noise(rng);
-    }
+  const cv::Mat noisy = withKinectNoise(exact, 3);
   const auto kept = [&](double noise_sigmas, double& rms) {
     DepthSmoother s;
     s.drop_unsmoothed = true;
