@@ -15,6 +15,7 @@ namespace {
 // Keyframes that may wait for the loop thread. Each holds its full-resolution images (~2 MB); the
 // thread takes 50 ms (p50) per keyframe and keyframes come every 150 ms or more, so a few do.
 constexpr std::size_t kMaxQueued = 4;
+constexpr std::size_t kMaxSettled = 64;  // corrections kept for settledAfter()
 // Nearest candidates by pose that are compared by appearance, per keyframe.
 constexpr std::size_t kMaxCompared = 20;
 // A loop that moves the newest pose by this much (m, or rad) is worth a log line.
@@ -154,7 +155,15 @@ void LoopCloser::run() {
     stats_.loop_latency.record(secondsSince(start));
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (lossless_) settled_.push_back(corrections_.snapshot());
+      if (lossless_) {
+        settled_.push_back(corrections_.snapshot());
+        // Fusion asks for states a few keyframes old (its slots and this queue bound how far it
+        // lags); one that stopped asking (after a failure) must not make them pile up.
+        while (settled_.size() > kMaxSettled) {
+          settled_.pop_front();
+          ++settled_first_;
+        }
+      }
     }
     changed_.notify_all();
   }

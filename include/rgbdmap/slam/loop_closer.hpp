@@ -166,7 +166,8 @@ class LoopCloser : public KeyframeSink {
   bool ended_ = false;  // the loop thread has stopped
   std::uint64_t added_ = 0;
   // Lossless only: settled_[i], the corrections once settled_first_ + i keyframes had been
-  // processed (as many as the fusion thread is behind the loop thread; live, none is kept).
+  // processed (as many as the fusion thread is behind the loop thread, at most kMaxSettled;
+  // live, none is kept).
   std::deque<PoseCorrections::Snapshot> settled_;
   std::uint64_t settled_first_ = 0;
   std::thread thread_;
