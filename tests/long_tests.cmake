@@ -25,6 +25,9 @@ set(RGBDMAP_LONG_TESTS
   PipelineReplay.KeyframeEveryFrameAndFineVoxels
   PipelineReplay.TwoReplaysGiveIdenticalMaps
   PipelineTracking.TwoOdometryReplaysGiveIdenticalMapsAndTrajectories
+  # Two lossless replays with loops compared (the loop thread's own test runs the same code
+  # under ThreadSanitizer)
+  PipelineLoopThread.TwoLosslessReplaysWithLoopsGiveTheSameMap
   OpenNI2Cli.ATumFolderThroughTheDriverGivesTheSameMapAsReadDirectly
   OpenNI2Cli.RecordFromATumFolderWritesTheSameImages
   # Sessions continued, localised, merged and streamed on real frames (12-30 s; 140-380 s under

@@ -83,5 +83,32 @@ TEST(PipelineLoopThread, ClosesLoopsWhileCheckpointingAndFinishesWithTheCorrecti
   EXPECT_LT(test::jsonNumber(test::readFile(dir + "/ate.json"), "ate_rmse_m"), 0.005);
 }
 
+// The local window and the loops move the newest keyframes at every keyframe, and tracking does
+// not wait for the loop thread: each keyframe is fused at the corrections as they were once the
+// loop thread had taken in the keyframes before it, however far that thread had got meanwhile.
+TEST(PipelineLoopThread, TwoLosslessReplaysWithLoopsGiveTheSameMap) {
+  const std::string sequence = test::sharedSynthetic("short_orbit", kShortOrbit);
+  const std::string dir = test::freshDir();
+  std::string maps[2], trajectories[2];
+  for (int i = 0; i < 2; ++i) {
+    const std::string out = dir + "/run" + std::to_string(i);
+    fs::create_directories(out);
+    std::string log;
+    ASSERT_EQ(test::run(test::binary() + " --source tum:" + sequence + " --out " + out +
+                            "/map.pcd --rate max -q --no-render --set pose.source=odometry"
+                            " --stats " +
+                            out + "/stats.json",
+                        &log),
+              0)
+        << log;
+    EXPECT_GE(test::jsonNumber(test::readFile(out + "/stats.json"), "loops_accepted"), 1) << log;
+    maps[i] = test::readFile(out + "/map.pcd");
+    trajectories[i] = test::readFile(out + "/map_trajectory.txt");
+  }
+  EXPECT_FALSE(maps[0].empty());
+  EXPECT_EQ(maps[0], maps[1]);
+  EXPECT_EQ(trajectories[0], trajectories[1]);
+}
+
 }  // namespace
 }  // namespace rgbdmap
