@@ -91,9 +91,7 @@ RGBDMAP_VECTOR_CLONES void DepthSmoother::apply(cv::Mat& depth, Buffers& buffers
       // inverse depths, inverted, is count / sum.
       const float measured = measured_row[u], smoothed = count[u] / sum[u];
       const bool enough = count[u] >= min_count;
-      const float d = measured - KinectNoise::kFrom;
-      const float sigma = KinectNoise::kBase + KinectNoise::kGrowth * d * d;
-      const bool flat = high[u] - low[u] <= range * measured + noise * sigma;
+      const bool flat = high[u] - low[u] <= range * measured + noise * kinectDepthSigma(measured);
       out[u] = ((measured > 0.0f) & enough & flat) ? smoothed : fallback * measured;
     }
   }
