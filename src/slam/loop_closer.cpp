@@ -159,10 +159,7 @@ void LoopCloser::run() {
         settled_.push_back(corrections_.snapshot());
         // Fusion asks for states a few keyframes old (its slots and this queue bound how far it
         // lags); one that stopped asking (after a failure) must not make them pile up.
-        while (settled_.size() > kMaxSettled) {
-          settled_.pop_front();
-          ++settled_first_;
-        }
+        if (settled_.size() > kMaxSettled) letSettledGoBefore(settled_first_ + 1);
       }
     }
     changed_.notify_all();
@@ -184,11 +181,15 @@ PoseCorrections::Snapshot LoopCloser::settledAfter(std::uint64_t added) {
   changed_.wait(lock, [&] { return settled_first_ + settled_.size() > added || ended_; });
   if (added < settled_first_ || added >= settled_first_ + settled_.size())
     return corrections_.snapshot();  // the thread has stopped (or a state long let go)
-  while (settled_first_ < added) {
+  letSettledGoBefore(added);
+  return settled_.front();
+}
+
+void LoopCloser::letSettledGoBefore(std::uint64_t added) {
+  while (settled_first_ < added && !settled_.empty()) {
     settled_.pop_front();
     ++settled_first_;
   }
-  return settled_.front();
 }
 
 PoseGraph::Edge LoopCloser::edgeOf(int from, int to, const Eigen::Isometry3d& measurement,

@@ -170,6 +170,7 @@ class LoopCloser : public KeyframeSink {
   // live, none is kept).
   std::deque<PoseCorrections::Snapshot> settled_;
   std::uint64_t settled_first_ = 0;
+  void letSettledGoBefore(std::uint64_t added);  // under mutex_
   std::thread thread_;
 };
 
