@@ -3,12 +3,15 @@
 // keyframe at once instead of blocking tracking; map tasks run on the fusion thread between
 // keyframes; finish() fuses everything submitted.
 #include <gtest/gtest.h>
+#include <pthread.h>
 
 #include <atomic>
 #include <chrono>
+#include <string>
 #include <thread>
 #include <vector>
 
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/base/worker_pool.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/config/config.hpp"
@@ -50,6 +53,13 @@ bool waitFor(const std::atomic<bool>& flag) {
     std::this_thread::sleep_for(1ms);
   }
   return true;
+}
+
+// The calling thread's name as top -H and gdb show it.
+std::string threadName() {
+  char name[16] = {};
+  pthread_getname_np(pthread_self(), name, sizeof name);
+  return name;
 }
 
 void expectSameCloud(const MapCloud& a, const MapCloud& b) {
@@ -116,6 +126,15 @@ TEST(WorkerPool, RunsEveryTaskOnceOnAllItsThreadsAndRethrowsTheFirstError) {
             static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
 }
 
+TEST(ThreadName, ANameLongerThanLinuxKeepsIsCutAtFifteenCharacters) {
+  std::string named;
+  std::thread([&] {
+    nameThisThread("rgbdmap-a-name-too-long");
+    named = threadName();
+  }).join();
+  EXPECT_EQ(named, "rgbdmap-a-name-");
+}
+
 TEST(PipelineFusion, BusySlotsRefuseALiveKeyframeAtOnceAndLoseNothingAccepted) {
   const Fixture f = loadFrames(8);
   RunStats stats;
@@ -152,15 +171,18 @@ TEST(PipelineFusion, MapTasksRunBetweenKeyframesOnTheFusionThread) {
   std::atomic<bool> done{false};
   std::size_t keyframes_seen = 99;
   std::thread::id task_thread;
+  std::string task_thread_name;
   for (std::size_t i = 0; i < 2; ++i) ASSERT_TRUE(fusion.submit(f.frames[i], true));
   fusion.request(MapRequest::kCheckpoint, [&](const Mapper& m) {
     keyframes_seen = m.keyframeTrajectory().size();
     task_thread = std::this_thread::get_id();
+    task_thread_name = threadName();
     done.store(true);
   });
   ASSERT_TRUE(waitFor(done));
   EXPECT_LE(keyframes_seen, 2u);
   EXPECT_NE(task_thread, std::this_thread::get_id());
+  EXPECT_EQ(task_thread_name, "rgbdmap-fusion");
   for (std::size_t i = 2; i < 4; ++i) ASSERT_TRUE(fusion.submit(f.frames[i], true));
   fusion.finish();
   EXPECT_EQ(mapper.keyframeTrajectory().size(), 4u);

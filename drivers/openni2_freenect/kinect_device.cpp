@@ -5,18 +5,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "rgbdmap/drivers/oni_property.hpp"
+
 namespace rgbdmap::openni2_freenect {
 namespace {
 
 static_assert(sizeof(freenect_raw_tilt_state) == sizeof(FakenectTiltState),
               "record --format fakenect writes accelerometer records of this size");
-
-template <typename T>
-OniStatus readValue(const void* data, int size, T& value) {
-  if (data == nullptr || size != static_cast<int>(sizeof(T))) return ONI_STATUS_BAD_PARAMETER;
-  std::memcpy(&value, data, sizeof(T));
-  return ONI_STATUS_OK;
-}
 
 }  // namespace
 
@@ -99,7 +94,8 @@ void KinectDevice::destroyStream(oni::driver::StreamBase* stream) {
 OniStatus KinectDevice::setProperty(int property, const void* data, int size) {
   if (property != ONI_DEVICE_PROPERTY_IMAGE_REGISTRATION) return ONI_STATUS_NOT_IMPLEMENTED;
   OniImageRegistrationMode mode;
-  if (const OniStatus status = readValue(data, size, mode); status != ONI_STATUS_OK) return status;
+  if (const OniStatus status = readProperty(data, size, mode); status != ONI_STATUS_OK)
+    return status;
   if (mode != ONI_IMAGE_REGISTRATION_OFF && mode != ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR)
     return ONI_STATUS_NOT_SUPPORTED;
   registered_.store(mode == ONI_IMAGE_REGISTRATION_DEPTH_TO_COLOR);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "rgbdmap/drivers/oni_property.hpp"
+
 namespace rgbdmap::openni2_freenect {
 namespace {
 
@@ -21,21 +23,6 @@ OniVideoMode mode(OniPixelFormat format) {
 }
 
 int bytesPerPixel(OniPixelFormat format) { return format == ONI_PIXEL_FORMAT_RGB888 ? 3 : 2; }
-
-template <typename T>
-OniStatus readValue(const void* data, int size, T& value) {
-  if (data == nullptr || size != static_cast<int>(sizeof(T))) return ONI_STATUS_BAD_PARAMETER;
-  std::memcpy(&value, data, sizeof(T));
-  return ONI_STATUS_OK;
-}
-
-template <typename T>
-OniStatus writeValue(void* data, int* size, const T& value) {
-  if (data == nullptr || size == nullptr || *size != static_cast<int>(sizeof(T)))
-    return ONI_STATUS_BAD_PARAMETER;
-  std::memcpy(data, &value, sizeof(T));
-  return ONI_STATUS_OK;
-}
 
 std::uint64_t nowMicroseconds() {
   return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
@@ -74,7 +61,7 @@ OniStatus KinectStream::setProperty(int property, const void* data, int size) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (property == ONI_STREAM_PROPERTY_VIDEO_MODE) {
     OniVideoMode wanted{};
-    if (const OniStatus status = readValue(data, size, wanted); status != ONI_STATUS_OK)
+    if (const OniStatus status = readProperty(data, size, wanted); status != ONI_STATUS_OK)
       return status;
     for (const OniVideoMode& m : modes_)
       if (m.pixelFormat == wanted.pixelFormat && m.resolutionX == wanted.resolutionX &&
@@ -86,7 +73,7 @@ OniStatus KinectStream::setProperty(int property, const void* data, int size) {
   }
   if (property == ONI_STREAM_PROPERTY_MIRRORING) {
     OniBool mirroring = FALSE;
-    if (const OniStatus status = readValue(data, size, mirroring); status != ONI_STATUS_OK)
+    if (const OniStatus status = readProperty(data, size, mirroring); status != ONI_STATUS_OK)
       return status;
     mirroring_ = mirroring != FALSE;
     return ONI_STATUS_OK;
@@ -98,17 +85,17 @@ OniStatus KinectStream::getProperty(int property, void* data, int* size) {
   std::lock_guard<std::mutex> lock(mutex_);
   switch (property) {
     case ONI_STREAM_PROPERTY_VIDEO_MODE:
-      return writeValue(data, size, mode_);
+      return writeProperty(data, size, mode_);
     case ONI_STREAM_PROPERTY_MIRRORING:
-      return writeValue(data, size, static_cast<OniBool>(mirroring_ ? TRUE : FALSE));
+      return writeProperty(data, size, static_cast<OniBool>(mirroring_ ? TRUE : FALSE));
     case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:  // the colour camera's (depth is registered to it)
-      return writeValue(data, size,
-                        static_cast<float>(2 * std::atan(kWidth / (2 * KinectV1Model::kFocal))));
+      return writeProperty(data, size,
+                           static_cast<float>(2 * std::atan(kWidth / (2 * KinectV1Model::kFocal))));
     case ONI_STREAM_PROPERTY_VERTICAL_FOV:
-      return writeValue(data, size,
-                        static_cast<float>(2 * std::atan(kHeight / (2 * KinectV1Model::kFocal))));
+      return writeProperty(
+          data, size, static_cast<float>(2 * std::atan(kHeight / (2 * KinectV1Model::kFocal))));
     case ONI_STREAM_PROPERTY_STRIDE:
-      return writeValue(data, size, kWidth * bytesPerPixel(mode_.pixelFormat));
+      return writeProperty(data, size, kWidth * bytesPerPixel(mode_.pixelFormat));
     default:
       return ONI_STATUS_NOT_IMPLEMENTED;
   }

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "property_value.hpp"
+#include "rgbdmap/drivers/oni_property.hpp"
 
 namespace rgbdmap::openni2_tum {
 namespace {

@@ -9,7 +9,7 @@
 #include "color_stream.hpp"
 #include "depth_stream.hpp"
 #include "driver_log.hpp"
-#include "property_value.hpp"
+#include "rgbdmap/drivers/oni_property.hpp"
 
 namespace rgbdmap::openni2_tum {
 namespace {

@@ -5,7 +5,7 @@
 
 #include "camera_presets.hpp"
 #include "driver_log.hpp"
-#include "property_value.hpp"
+#include "rgbdmap/drivers/oni_property.hpp"
 
 namespace rgbdmap::openni2_tum {
 

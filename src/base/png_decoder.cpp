@@ -9,12 +9,11 @@
 #include <opencv2/core.hpp>
 #include <optional>
 
-#include "rgbdmap/base/png_paeth.hpp"
+#include "rgbdmap/base/png_format.hpp"
 
 namespace rgbdmap {
 namespace {
 
-constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 constexpr std::size_t kChunkOverhead = 12;  // length, type, CRC
 constexpr std::uint32_t kMaxChunkLength = 0x7fffffff;
 // Larger images are left to OpenCV, which refuses them in its own words: libpng's default
@@ -250,7 +249,7 @@ PngDecoder::Status readChunks(const std::uint8_t* data, std::size_t size, PngDec
     return PngDecoder::Status::kCorrupt;
   };
   enum class Idat { kBefore, kIn, kAfter } idat = Idat::kBefore;
-  for (std::size_t pos = sizeof(kSignature);;) {
+  for (std::size_t pos = sizeof(kPngSignature);;) {
     // Messages are built only on failure: a frame's decoding allocates nothing.
     const auto at = [pos] { return " at byte " + std::to_string(pos); };
     if (size - pos < kChunkOverhead)
@@ -308,7 +307,7 @@ PngDecoder::Status PngDecoder::decode(const std::uint8_t* data, std::size_t size
     error = why;
     return Status::kCorrupt;
   };
-  if (size < sizeof(kSignature) || !std::equal(kSignature, kSignature + 8, data))
+  if (size < sizeof(kPngSignature) || !std::equal(kPngSignature, kPngSignature + 8, data))
     return corrupt("not a PNG file (bad signature)");
   PngImage image;
   const Status read = readChunks(data, size, mode, compressed_, image, error);

@@ -6,12 +6,10 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "rgbdmap/base/png_paeth.hpp"
+#include "rgbdmap/base/png_format.hpp"
 
 namespace rgbdmap {
 namespace {
-
-constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 
 void putBigEndian(std::vector<std::uint8_t>& out, std::uint32_t value) {
   for (int shift = 24; shift >= 0; shift -= 8)
@@ -171,7 +169,7 @@ bool PngEncoder::encode(const cv::Mat& image, std::vector<std::uint8_t>& png, st
   filterRows(raw_, row_bytes, rows, pixel_bytes, filtered_, candidate_);
 
   png.clear();
-  png.insert(png.end(), std::begin(kSignature), std::end(kSignature));
+  png.insert(png.end(), std::begin(kPngSignature), std::end(kPngSignature));
   std::uint8_t header[13];
   const std::uint32_t width = static_cast<std::uint32_t>(image.cols);
   const std::uint32_t height = static_cast<std::uint32_t>(image.rows);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/base/thread_priority.hpp"
 
 namespace rgbdmap {
@@ -37,6 +38,7 @@ void WorkerPool::work() {
 }
 
 void WorkerPool::workerMain() {
+  nameThisThread("rgbdmap-worker");
   std::uint64_t seen = 0;
   int niceness = 0;
   for (;;) {

@@ -27,7 +27,8 @@ std::string baseName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-std::string folderOf(const std::string& path) {
+// The folder part of a path with its slash ("" for a bare name): what a relative image name joins.
+std::string folderPrefixOf(const std::string& path) {
   const std::size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
 }
@@ -136,7 +137,7 @@ OccupancyGrid readGrid(const std::string& yaml_path) {
   }
   if (!(grid.resolution > 0.0)) throw InputError(yaml_path + ": resolution must be positive");
   const std::string pgm_path =
-      image.empty() || image[0] == '/' ? image : folderOf(yaml_path) + image;
+      image.empty() || image[0] == '/' ? image : folderPrefixOf(yaml_path) + image;
   std::ifstream in(pgm_path, std::ios::binary);
   if (!in)
     throw InputError(pgm_path + ": cannot open the grid's image (named in " + yaml_path + ")");

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "rgbdmap/base/steady_time.hpp"
 #include "rgbdmap/mapping/mesh_extractor.hpp"
 
 namespace rgbdmap {
@@ -25,10 +26,6 @@ constexpr float kPruneClearanceVoxels = 2.0f;
 // Beyond map.memory, blocks go to disk once no keyframe has updated them for this many: those in
 // view stay, and a camera turning back within a few keyframes finds its blocks in memory.
 constexpr std::uint64_t kStoreIdleKeyframes = 10;
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // Whether two sorted lists share an element.
 bool intersects(const std::vector<std::uint64_t>& a, const std::vector<std::uint64_t>& b) {

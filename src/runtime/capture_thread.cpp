@@ -7,6 +7,7 @@
 
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/steady_time.hpp"
+#include "rgbdmap/base/thread_name.hpp"
 
 namespace rgbdmap {
 namespace {
@@ -29,6 +30,7 @@ CaptureThread::CaptureThread(FrameSource& source, FrameQueue& queue, RunStats& s
 }
 
 void CaptureThread::run() {
+  nameThisThread("rgbdmap-capture");
   try {
     read();
   } catch (const std::exception& e) {

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "rgbdmap/base/steady_time.hpp"
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/map_files/grid_file.hpp"
 #include "rgbdmap/map_files/octomap_file.hpp"
 #include "rgbdmap/map_files/pcd_file.hpp"
@@ -123,6 +124,7 @@ void CheckpointWriter::writeStore(const MapCloud& cloud, Result& result) {
 }
 
 void CheckpointWriter::run() {
+  nameThisThread("rgbdmap-save");
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     wake_.wait(lock, [this] { return stop_ || pending_; });

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <exception>
 
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/base/thread_priority.hpp"
 
 namespace rgbdmap {
@@ -52,6 +53,7 @@ void FusionThread::serveRequest() {
 }
 
 void FusionThread::run() {
+  nameThisThread("rgbdmap-fusion");
   // The map may lag a few keyframes behind (they wait in the queue); a frame's pose may not.
   stepBackFromTracking(kFusionNiceness);
   bool finished = false;

@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <ctime>
 
+#include "rgbdmap/base/thread_name.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -55,6 +57,7 @@ bool RunSignals::runStarts(Run run) {
 }
 
 void RunSignals::wait() {
+  nameThisThread("rgbdmap-signals");
   const sigset_t set = runSignals();
   const timespec timeout{0, 100 * 1000 * 1000};
   while (!done_.load()) {

@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "rgbdmap/base/steady_time.hpp"
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/runtime/run_mode.hpp"
 
 namespace rgbdmap {
@@ -29,6 +30,7 @@ TrackingThread::TrackingThread(Parts parts, bool wait_for_fusion, CheckpointOpti
 }
 
 void TrackingThread::run() {
+  nameThisThread("rgbdmap-track");
   bool finished = false;
   while (!finished) {
     // Frames may stop coming (camera unplugged), so wake up regularly for checkpoints.

@@ -16,8 +16,6 @@
 namespace rgbdmap {
 namespace {
 
-double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
-
 // A kept keyframe's graph keyframe: its anchor, or the nearest one the graph has (a keyframe
 // fused before the loop closer took its anchor in shares the newest correction; one with no
 // anchor was fused as tracked, which is keyframe 0's frame).
@@ -219,7 +217,7 @@ std::optional<std::vector<SessionMerger::Match>> SessionMerger::agreeing(
     for (const Match& m : matches) {
       const Eigen::Isometry3d change = centre.transform.inverse() * m.transform;
       if (change.translation().norm() <= options_.agree_translation &&
-          angle(change) <= options_.agree_rotation)
+          rotationAngle(change) <= options_.agree_rotation)
         group.push_back(m);
     }
     if (group.size() > best.size()) best = std::move(group);
@@ -283,7 +281,7 @@ SessionMerger::Joined SessionMerger::join(const Session& merged, const Session& 
     const Eigen::Isometry3d correction =
         graph.pose(first_free + m.node).inverse() * graph.pose(m.target) * m.measurement;
     const double allowance = kBaseDriftAllowance + settings_.loop.drift_per_metre * nearest;
-    if (correction.translation().norm() <= allowance && angle(correction) <= allowance)
+    if (correction.translation().norm() <= allowance && rotationAngle(correction) <= allowance)
       joined.links.push_back(m);
   }
   // With them, until the graph agrees with every link it keeps (a place that only looked alike

@@ -12,8 +12,8 @@
 namespace rgbdmap {
 namespace {
 
-constexpr char kGraphKind[5] = "SGRF";
-constexpr char kPlaceKind[5] = "SPLC";
+constexpr char kStreamGraphKind[5] = "SGRF";
+constexpr char kStreamPlaceKind[5] = "SPLC";
 constexpr char kPieceKind[5] = "SPCE";
 constexpr std::uint32_t kVersion = 1;
 constexpr std::size_t kPoseBytes = 12 * 8;
@@ -66,7 +66,7 @@ template <typename Graph>
 std::string graphRecord(std::uint64_t run, const CameraIntrinsics& camera, const Graph& graph,
                         std::size_t first, std::size_t first_edge) {
   std::string bytes;
-  RecordWriter out(bytes, kGraphKind, kVersion);
+  RecordWriter out(bytes, kStreamGraphKind, kVersion);
   out.put<std::uint64_t>(run);
   putCamera(out, camera);
   const std::size_t keyframes = graph.keyframes(), edges = graph.edges().size();
@@ -87,7 +87,7 @@ std::string graphRecord(std::uint64_t run, const CameraIntrinsics& camera, const
 
 std::string placeRecord(std::uint64_t run, std::size_t id, const PlaceRecognition::Place& place) {
   std::string bytes;
-  RecordWriter out(bytes, kPlaceKind, kVersion);
+  RecordWriter out(bytes, kStreamPlaceKind, kVersion);
   out.put<std::uint64_t>(run);
   out.put<std::uint64_t>(id);
   putPlace(out, place);
@@ -207,7 +207,7 @@ std::vector<SessionStream::Record> SessionStream::take(const LoopCloser& graph, 
 std::optional<std::uint64_t> runOfRecord(const std::string& record) {
   const std::string kind = recordKind(record);
   constexpr std::size_t kHeaderBytes = 32;
-  if ((kind != kGraphKind && kind != kPlaceKind && kind != kPieceKind) ||
+  if ((kind != kStreamGraphKind && kind != kStreamPlaceKind && kind != kPieceKind) ||
       record.size() < kHeaderBytes + 8)
     return std::nullopt;
   std::uint64_t run = 0;
@@ -226,16 +226,16 @@ void SessionAssembler::reset(std::uint64_t run) {
 SessionAssembler::Result SessionAssembler::apply(const std::string& record,
                                                  const std::string& source) {
   const std::string kind = recordKind(record);
-  if (kind != kGraphKind && kind != kPlaceKind && kind != kPieceKind)
+  if (kind != kStreamGraphKind && kind != kStreamPlaceKind && kind != kPieceKind)
     throw InputError(source + ": not a session record (" +
                      (kind.empty() ? std::string("no RGBDMAP header") : "kind '" + kind + "'") +
                      ")");
-  if (kind == kGraphKind) {
-    BinaryReader in = readRecord(record, source, kGraphKind, kVersion);
+  if (kind == kStreamGraphKind) {
+    BinaryReader in = readRecord(record, source, kStreamGraphKind, kVersion);
     return applyGraph(in);
   }
-  if (kind == kPlaceKind) {
-    BinaryReader in = readRecord(record, source, kPlaceKind, kVersion);
+  if (kind == kStreamPlaceKind) {
+    BinaryReader in = readRecord(record, source, kStreamPlaceKind, kVersion);
     return applyPlace(in);
   }
   BinaryReader in = readRecord(record, source, kPieceKind, kVersion);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
@@ -17,8 +18,6 @@ constexpr std::size_t kMaxCompared = 20;
 // After this many metres walked without a placement, the search covers the whole saved map
 // again (the estimate may have drifted beyond the nearby places).
 constexpr double kLostAfterMetres = 3.0;
-
-double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
 }  // namespace
 
@@ -73,6 +72,7 @@ Localiser::Counts Localiser::counts() const {
 }
 
 void Localiser::run() {
+  nameThisThread("rgbdmap-locate");
   giveWayToTracking();
   for (;;) {
     TrackedKeyframe keyframe;
@@ -171,7 +171,7 @@ void Localiser::accept(const Placement& placement) {
         current_->odometry_in_map.inverse() * placement.odometry_in_map;
     spdlog::debug("localisation: keyframe {} placed, {:.3f} m and {:.2f} degrees from the last",
                   placement.keyframe, change.translation().norm(),
-                  angle(change) * kDegreesPerRadian);
+                  rotationAngle(change) * kDegreesPerRadian);
   }
   current_ = placement;
   if (table_.size() <= placement.keyframe) {

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "rgbdmap/base/steady_time.hpp"
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
@@ -14,14 +15,12 @@ namespace {
 
 // Keyframes that may wait for the loop thread. Each holds its full-resolution images (~2 MB); the
 // thread takes 50 ms (p50) per keyframe and keyframes come every 150 ms or more, so a few do.
-constexpr std::size_t kMaxQueued = 4;
+constexpr std::size_t kMaxWaitingKeyframes = 4;
 constexpr std::size_t kMaxSettled = 64;  // corrections kept for settledAfter()
 // Nearest candidates by pose that are compared by appearance, per keyframe.
-constexpr std::size_t kMaxCompared = 20;
+constexpr std::size_t kMaxComparedByAppearance = 20;
 // A loop that moves the newest pose by this much (m, or rad) is worth a log line.
 constexpr double kNoticeableShift = 0.01;
-
-double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
 
 }  // namespace
 
@@ -78,7 +77,7 @@ LoopCloser::~LoopCloser() { finish(); }
 void LoopCloser::addKeyframe(TrackedKeyframe keyframe) {
   std::unique_lock<std::mutex> lock(mutex_);
   if (lossless_) {
-    changed_.wait(lock, [&] { return queue_.size() < kMaxQueued; });
+    changed_.wait(lock, [&] { return queue_.size() < kMaxWaitingKeyframes; });
   } else {
     // Behind a live camera: the oldest waiting keyframe that still has its images joins the
     // graph without a search, not this one. Where the camera is now is where a loop is about to
@@ -87,7 +86,7 @@ void LoopCloser::addKeyframe(TrackedKeyframe keyframe) {
     // (Keyframes come one at a time: one gives way at most.)
     const auto has_images = [](const TrackedKeyframe& k) { return !k.color.empty(); };
     if (static_cast<std::size_t>(std::count_if(queue_.begin(), queue_.end(), has_images)) >=
-        kMaxQueued) {
+        kMaxWaitingKeyframes) {
       TrackedKeyframe& oldest = *std::find_if(queue_.begin(), queue_.end(), has_images);
       oldest.color.release();
       oldest.depth.release();
@@ -126,6 +125,7 @@ void LoopCloser::readGraph(const std::function<void(const GraphView&)>& read) co
 }
 
 void LoopCloser::run() {
+  nameThisThread("rgbdmap-loops");
   // Loop closure improves what tracking and fusion do; when two cores are short, they come first.
   giveWayToTracking();
   {
@@ -238,7 +238,7 @@ void LoopCloser::process(TrackedKeyframe& keyframe) {
     graph_.addNode(graph_.pose(reference) * from);
     graph_.addEdge(edgeOf(reference, id, from, information, false));
     node.walked = nodes_[static_cast<std::size_t>(reference)].walked + from.translation().norm() +
-                  kMetresPerRadian * angle(from);
+                  kMetresPerRadian * rotationAngle(from);
   }
   nodes_.push_back(node);
   graph_lock.unlock();
@@ -299,7 +299,7 @@ std::vector<int> LoopCloser::candidatesFor(int id) const {
       near.emplace_back(*distance, j);
   }
   std::sort(near.begin(), near.end());
-  if (near.size() > kMaxCompared) near.resize(kMaxCompared);
+  if (near.size() > kMaxComparedByAppearance) near.resize(kMaxComparedByAppearance);
   std::vector<int> ids;
   for (const auto& n : near) ids.push_back(n.second);
   return ids;
@@ -311,7 +311,7 @@ bool LoopCloser::nearRememberedPlace(int id) const {
     if (!places_.described(j)) continue;
     const Eigen::Isometry3d relative = graph_.pose(j).inverse() * x;
     if (relative.translation().norm() < options_.place_spacing &&
-        angle(relative) < options_.place_spacing_angle)
+        rotationAngle(relative) < options_.place_spacing_angle)
       return true;
   }
   return false;
@@ -326,7 +326,7 @@ bool LoopCloser::plausible(const LoopMeasurement& loop) const {
   const double walked = std::abs(nodes_[static_cast<std::size_t>(loop.later)].walked -
                                  nodes_[static_cast<std::size_t>(loop.earlier)].walked);
   const double allowance = kBaseDriftAllowance + options_.drift_per_metre * walked;
-  return correction.translation().norm() <= allowance && angle(correction) <= allowance;
+  return correction.translation().norm() <= allowance && rotationAngle(correction) <= allowance;
 }
 
 bool LoopCloser::agree(const LoopMeasurement& a, const LoopMeasurement& b) const {
@@ -337,7 +337,7 @@ bool LoopCloser::agree(const LoopMeasurement& a, const LoopMeasurement& b) const
       impliedPose(a) * graph_.pose(a.later).inverse() * graph_.pose(b.later);
   const Eigen::Isometry3d difference = moved_by_a.inverse() * impliedPose(b);
   return difference.translation().norm() <= options_.consistent_translation &&
-         angle(difference) <= options_.consistent_rotation;
+         rotationAngle(difference) <= options_.consistent_rotation;
 }
 
 void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
@@ -374,7 +374,8 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
   const bool revisit =
       last_closed_ < 0 || last.later - last_closed_ > options_.consistency_keyframes;
   last_closed_ = last.later;
-  if (!revisit && moved.translation().norm() < kNoticeableShift && angle(moved) < kNoticeableShift)
+  if (!revisit && moved.translation().norm() < kNoticeableShift &&
+      rotationAngle(moved) < kNoticeableShift)
     return;
   const Node& later = nodes_[static_cast<std::size_t>(last.later)];
   const Node& earlier = nodes_[static_cast<std::size_t>(last.earlier)];
@@ -383,7 +384,7 @@ void LoopCloser::close(const std::vector<LoopMeasurement>& loops) {
       "the camera's pose moved {:.1f} cm, {:.1f} deg ({} keyframes optimised in {:.0f} ms)",
       last.later, later.timestamp, last.earlier, earlier.timestamp,
       later.timestamp - earlier.timestamp, 100.0 * moved.translation().norm(),
-      angle(moved) * kDegreesPerRadian, graph_.size() - first_free, summary.seconds * 1e3);
+      rotationAngle(moved) * kDegreesPerRadian, graph_.size() - first_free, summary.seconds * 1e3);
 }
 
 bool LoopCloser::observeFloor(int id, const cv::Mat& depth) {
@@ -434,7 +435,7 @@ void LoopCloser::tighten(const std::vector<LoopMeasurement>& local, bool floor_s
         (graph_.pose(m.earlier).inverse() * graph_.pose(m.later)).inverse() * m.later_in_earlier;
     spdlog::debug("window: keyframe {} -> {}: {:.1f} mm, {:.2f} deg from the graph, overlap {:.2f}",
                   m.later, m.earlier, 1000.0 * change.translation().norm(),
-                  angle(change) * kDegreesPerRadian, m.overlap);
+                  rotationAngle(change) * kDegreesPerRadian, m.overlap);
     graph_.addEdge(edgeOf(m.earlier, m.later, m.later_in_earlier, m.information, false));
   }
   const PoseGraph::Summary summary = graph_.optimise(20, first_free);

@@ -5,11 +5,6 @@
 #include "rgbdmap/slam/motion.hpp"
 
 namespace rgbdmap {
-namespace {
-
-double angle(const Eigen::Isometry3d& t) { return rotationAngle(t); }
-
-}  // namespace
 
 TrackingOptions loopVerificationOptions(const TrackingOptions& tracking, const LoopOptions& loop) {
   TrackingOptions o = tracking;
@@ -27,7 +22,7 @@ std::optional<LoopMeasurement> verifiedLoop(const AlignmentResult& dense,
     return std::nullopt;
   const Eigen::Isometry3d change = by_features.inverse() * dense.motion;
   if (change.translation().norm() > loop.max_disagreement_translation ||
-      angle(change) > loop.max_disagreement_rotation ||
+      rotationAngle(change) > loop.max_disagreement_rotation ||
       dense.motion.translation().norm() > loop.max_distance)
     return std::nullopt;
   return measurementOf(dense);

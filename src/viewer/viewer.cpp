@@ -30,6 +30,7 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
+#include "rgbdmap/base/thread_name.hpp"
 #include "rgbdmap/viewer/display_cloud.hpp"
 
 namespace rgbdmap {
@@ -476,6 +477,7 @@ void Viewer::waitUntilClosed() {
 }
 
 void Viewer::run() {
+  nameThisThread("rgbdmap-viewer");
   // Drawing yields the CPU to mapping; Mesa's software rasteriser threads, started from this
   // thread, inherit the niceness.
   if (options_.nice > 0) ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), options_.nice);

@@ -1,8 +1,13 @@
 #pragma once
 
+#include <cstdint>
 #include <cstdlib>
 
+// What the PNG decoder and encoder share of the format.
 namespace rgbdmap {
+
+// The eight bytes every PNG file begins with.
+constexpr std::uint8_t kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 
 // PNG's Paeth predictor of a byte from its left (a), upper (b) and upper-left (c) neighbours:
 // whichever is nearest a + b - c, ties to a, then b. Branch-free by masks: photos and noisy renders

@@ -7,10 +7,10 @@
 #include <string>
 #include <type_traits>
 
-namespace rgbdmap::openni2_tum {
+namespace rgbdmap {
 
-// OpenNI2 passes property values as (pointer, size in bytes); these check the size against
-// the property's type instead of trusting the caller.
+// OpenNI2 hands a driver plugin (openni2_tum, openni2_freenect) property values as (pointer, size
+// in bytes); these check the size against the property's type instead of trusting the caller.
 template <typename T>
 OniStatus readProperty(const void* data, int size, T& value) {
   static_assert(std::is_trivially_copyable_v<T>);
@@ -38,4 +38,4 @@ inline OniStatus writeProperty(void* data, int* size, const std::string& value) 
   return ONI_STATUS_OK;
 }
 
-}  // namespace rgbdmap::openni2_tum
+}  // namespace rgbdmap
