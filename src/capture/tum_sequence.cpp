@@ -7,6 +7,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/base/file_names.hpp"
 #include "rgbdmap/base/opencv_codecs.hpp"
+#include "rgbdmap/base/png_format.hpp"
 #include "rgbdmap/base/text_lines.hpp"
 #include "rgbdmap/capture/association.hpp"
 
@@ -94,15 +95,17 @@ std::string TumSequence::presetForFolder(const std::string& folder) {
 
 namespace {
 
+template <std::size_t N>
+bool startsWith(const std::vector<unsigned char>& bytes, const unsigned char (&signature)[N]) {
+  return bytes.size() >= N && std::equal(signature, signature + N, bytes.begin());
+}
+
 // The container format from the first bytes, for messages and for the depth rule.
 std::string imageFormat(const std::vector<unsigned char>& bytes) {
-  const auto starts = [&](std::initializer_list<unsigned char> sig) {
-    return bytes.size() >= sig.size() && std::equal(sig.begin(), sig.end(), bytes.begin());
-  };
-  if (starts({0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'})) return "PNG";
-  if (starts({'I', 'I', '*', 0}) || starts({'M', 'M', 0, '*'})) return "TIFF";
-  if (starts({0xff, 0xd8, 0xff})) return "JPEG";
-  if (starts({'B', 'M'})) return "BMP";
+  if (startsWith(bytes, kPngSignature)) return "PNG";
+  if (startsWith(bytes, {'I', 'I', '*', 0}) || startsWith(bytes, {'M', 'M', 0, '*'})) return "TIFF";
+  if (startsWith(bytes, {0xff, 0xd8, 0xff})) return "JPEG";
+  if (startsWith(bytes, {'B', 'M'})) return "BMP";
   return "";
 }
 
