@@ -26,7 +26,9 @@ build() {  # build <dir> <target> [cmake args...]
 sanitized=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDMAP_BUILD_BENCH=OFF -DCMAKE_UNITY_BUILD=ON
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG")
 
-section() { printf '\n==== %s (%s)\n' "$1" "$(date +%T)"; }
+# Each section says when it starts and how much disk is left (the three builds and their tests'
+# files need about 12 GB at the most).
+section() { printf '\n==== %s (%s, %s free)\n' "$1" "$(date +%T)" "$(df -h --output=avail . | tail -1 | tr -d ' ')"; }
 
 section "release build and tests"
 build build all -DCMAKE_BUILD_TYPE=Release
@@ -42,6 +44,10 @@ section "ThreadSanitizer: threaded tests"
 build build-tsan threaded_tests "${sanitized[@]}" -DRGBDMAP_SANITIZE=thread -DRGBDMAP_WITH_ROS=OFF
 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$root/tests/tsan.supp" \
   ctest --test-dir build-tsan --output-on-failure -j "$jobs" -L threads -LE long --timeout 1800
+# Its gigabytes of instrumented programs go before the next build makes as many: CI machines'
+# disks can be small (a run stopped on a full disk linking the last ASan program).
+# RGBDMAP_KEEP_BUILDS=1 keeps it for a later incremental run.
+[ "${RGBDMAP_KEEP_BUILDS:-}" = 1 ] || rm -rf build-tsan
 
 section "AddressSanitizer + UBSan: the tests not threaded, but the long ones"
 build build-asan asan_tests "${sanitized[@]}" -DRGBDMAP_SANITIZE=address

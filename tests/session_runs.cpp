@@ -33,10 +33,7 @@ const Session& mappedSession(const std::string& tum_name) {
   static std::map<std::string, Session> sessions;
   const auto found = sessions.find(tum_name);
   if (found != sessions.end()) return found->second;
-  const std::string dir =
-      std::string(RGBDMAP_TEST_TMP) + "/mapped." + tum_name + "." + std::to_string(::getpid());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const std::string dir = processDir("mapped." + tum_name);
   mapTo(tumDir(tum_name), dir + "/map.pcd");
   return sessions.emplace(tum_name, readSession(dir + "/map.session")).first->second;
 }

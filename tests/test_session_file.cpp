@@ -28,10 +28,7 @@ const std::string& mappedRun() {
     // A folder of this process's own: CTest runs each test in its own process, in parallel, and
     // each maps once (a shared folder was emptied by one while another read it). --rate max:
     // at a camera's pace a busy sanitizer build drops frames and keeps fewer keyframes.
-    const std::string d =
-        std::string(RGBDMAP_TEST_TMP) + "/SessionFile.run." + std::to_string(::getpid());
-    fs::remove_all(d);
-    fs::create_directories(d);
+    const std::string d = test::processDir("SessionFile.run");
     std::string output;
     const int code =
         test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + d +

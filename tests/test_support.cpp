@@ -21,10 +21,62 @@ std::string dataDir() { return RGBDMAP_DATA_DIR; }
 std::string tumDir(const std::string& name) { return dataDir() + "/tum/" + name; }
 std::string binary() { return RGBDMAP_BINARY; }
 
-std::string freshDir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+namespace {
+
+std::string freshDirOf(const ::testing::TestInfo& info) {
+  return std::string(RGBDMAP_TEST_TMP) + "/" + info.test_suite_name() + "." + info.name();
+}
+
+// A passing test's folder goes when it ends: the suite writes gigabytes of maps, sessions and
+// sequences, three builds' worth on CI's disk. A failing test's stays for whoever looks into it,
+// and RGBDMAP_TEST_KEEP_DIRS=1 keeps them all.
+class RemoveFreshDirOfPassingTest : public ::testing::EmptyTestEventListener {
+  void OnTestEnd(const ::testing::TestInfo& info) override {
+    if (!info.result()->Passed()) return;
+    std::error_code ignored;  // a folder a child process still writes in is left, not fatal
+    std::filesystem::remove_all(freshDirOf(info), ignored);
+  }
+};
+
+bool keepDirs() {
+  const char* keep = std::getenv("RGBDMAP_TEST_KEEP_DIRS");
+  return keep && std::string(keep) == "1";
+}
+
+void removeFreshDirsOfPassingTests() {
+  if (keepDirs()) return;
+  // gtest owns the listener once appended.
+  ::testing::UnitTest::GetInstance()->listeners().Append(new RemoveFreshDirOfPassingTest);
+}
+
+// The folders of processDir(), removed when the process exits with every test passed.
+struct ProcessDirs {
+  std::vector<std::string> folders;
+  ~ProcessDirs() {
+    if (!::testing::UnitTest::GetInstance()->Passed() || keepDirs()) return;
+    for (const auto& folder : folders) {
+      std::error_code ignored;
+      std::filesystem::remove_all(folder, ignored);
+    }
+  }
+};
+
+}  // namespace
+
+std::string processDir(const std::string& name) {
+  static ProcessDirs dirs;
   const std::string dir =
-      std::string(RGBDMAP_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
+      std::string(RGBDMAP_TEST_TMP) + "/" + name + "." + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  dirs.folders.push_back(dir);
+  return dir;
+}
+
+std::string freshDir() {
+  static const bool listening = (removeFreshDirsOfPassingTests(), true);
+  (void)listening;
+  const std::string dir = freshDirOf(*::testing::UnitTest::GetInstance()->current_test_info());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

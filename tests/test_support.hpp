@@ -14,7 +14,12 @@ std::string tumDir(const std::string& name);  // dataDir()/tum/<name>
 // The rgbdmap executable under test.
 std::string binary();
 // A fresh empty folder for one test: <build>/tests/tmp/<suite>.<test>.
+// Removed when the test passes (kept if it fails, and all kept with RGBDMAP_TEST_KEEP_DIRS=1).
 std::string freshDir();
+// A fresh empty folder for what one test process computes once and its tests share:
+// <build>/tests/tmp/<name>.<pid> (CTest runs each test in a process of its own, in parallel),
+// removed when the process exits with every test passed.
+std::string processDir(const std::string& name);
 
 // Runs a command with /bin/sh; returns the exit code (or 128+signal), stdout+stderr in output.
 int run(const std::string& command, std::string* output = nullptr);
