@@ -23,6 +23,13 @@ std::string binary() { return RGBDMAP_BINARY; }
 
 namespace {
 
+// `dir`, emptied (made if missing).
+std::string emptied(const std::string& dir) {
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
 std::string freshDirOf(const ::testing::TestInfo& info) {
   return std::string(RGBDMAP_TEST_TMP) + "/" + info.test_suite_name() + "." + info.name();
 }
@@ -65,21 +72,15 @@ struct ProcessDirs {
 
 std::string processDir(const std::string& name) {
   static ProcessDirs dirs;
-  const std::string dir =
-      std::string(RGBDMAP_TEST_TMP) + "/" + name + "." + std::to_string(::getpid());
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  dirs.folders.push_back(dir);
-  return dir;
+  dirs.folders.push_back(
+      emptied(std::string(RGBDMAP_TEST_TMP) + "/" + name + "." + std::to_string(::getpid())));
+  return dirs.folders.back();
 }
 
 std::string freshDir() {
   static const bool listening = (removeFreshDirsOfPassingTests(), true);
   (void)listening;
-  const std::string dir = freshDirOf(*::testing::UnitTest::GetInstance()->current_test_info());
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return emptied(freshDirOf(*::testing::UnitTest::GetInstance()->current_test_info()));
 }
 
 int run(const std::string& command, std::string* output) {
