@@ -3,24 +3,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "rgbdmap/tracking/orb_matches.hpp"
 #include "rgbdmap/tracking/relocaliser.hpp"
 
 namespace rgbdmap {
 namespace {
-
-void ratioMatches(const cv::Mat& a, const cv::Mat& b, std::vector<cv::DMatch>& matches) {
-  matches.clear();
-  if (a.rows < 2 || b.rows < 2) return;
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(a, b, knn, 2);
-  // Lowe's ratio test, as loop closure's: distinctive matches only.
-  for (const auto& m : knn)
-    if (m.size() == 2 && m[0].distance <= 0.8f * m[1].distance) matches.push_back(m[0]);
-}
 
 // A reference level's points drawn into its image: each point's intensity and depth spread over
 // its four nearest pixels by bilinear weights (a place seen from elsewhere does not fall on pixel

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdmap/capture/lens_undistortion.hpp"
+#include "rgbdmap/tracking/orb_matches.hpp"
 
 namespace rgbdmap {
 
@@ -14,8 +15,7 @@ Relocaliser::Relocaliser(const CameraIntrinsics& camera, int min_inliers, float 
       min_inliers_(min_inliers),
       min_depth_(min_depth),
       max_depth_(max_depth),
-      orb_(cv::ORB::create(800)),
-      matcher_(cv::DescriptorMatcher::create(cv::DescriptorMatcher::BRUTEFORCE_HAMMING)) {}
+      orb_(cv::ORB::create(800)) {}
 
 void Relocaliser::remember(const Frame& frame, RelocalisationView& view) const {
   cv::cvtColor(frame.color, view.gray, cv::COLOR_BGR2GRAY);
@@ -75,14 +75,8 @@ void Relocaliser::describePrepared(const cv::Mat& depth, RelocalisationView& vie
 }
 
 void Relocaliser::ratioMatches(const RelocalisationView& keyframe,
-                               std::vector<cv::DMatch>& matches) {
-  matches.clear();
-  if (keyframe.descriptors.rows < 2 || current_descriptors_.rows < 2) return;
-  // Lowe's ratio test on the two nearest neighbours keeps distinctive matches only.
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher_->knnMatch(keyframe.descriptors, current_descriptors_, knn, 2);
-  for (const auto& m : knn)
-    if (m.size() == 2 && m[0].distance <= 0.8f * m[1].distance) matches.push_back(m[0]);
+                               std::vector<cv::DMatch>& matches) const {
+  rgbdmap::ratioMatches(keyframe.descriptors, current_descriptors_, matches);
 }
 
 int Relocaliser::similarity(RelocalisationView& keyframe) {

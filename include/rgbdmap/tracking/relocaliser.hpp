@@ -56,13 +56,12 @@ class Relocaliser {
   // Keeps the keypoints with a depth in range, as 3-D points with their descriptor rows.
   void attachPoints(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& descriptors,
                     const cv::Mat& depth, RelocalisationView& view) const;
-  void ratioMatches(const RelocalisationView& keyframe, std::vector<cv::DMatch>& matches);
+  void ratioMatches(const RelocalisationView& keyframe, std::vector<cv::DMatch>& matches) const;
 
   CameraIntrinsics camera_;
   int min_inliers_;
   float min_depth_, max_depth_;
   cv::Ptr<cv::ORB> orb_;
-  cv::Ptr<cv::DescriptorMatcher> matcher_;
   std::vector<cv::KeyPoint> current_keypoints_;
   cv::Mat current_descriptors_;
 };

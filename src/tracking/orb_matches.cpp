@@ -1,0 +1,62 @@
+#include "rgbdmap/tracking/orb_matches.hpp"
+
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include "rgbdmap/base/vector_clones.hpp"
+
+namespace rgbdmap {
+namespace {
+
+// Descriptors of `words` 64-bit words (ORB's 32 bytes: 4); rows copied into one contiguous array
+// by the caller.
+RGBDMAP_VECTOR_CLONES void nearestTwo(const std::uint64_t* query, std::size_t query_rows,
+                                      const std::uint64_t* train, std::size_t train_rows,
+                                      std::size_t words, float ratio,
+                                      std::vector<cv::DMatch>& matches) {
+  for (std::size_t i = 0; i < query_rows; ++i) {
+    const std::uint64_t* q = query + i * words;
+    int best = std::numeric_limits<int>::max(), second = best;
+    int best_row = -1;
+    for (std::size_t j = 0; j < train_rows; ++j) {
+      const std::uint64_t* t = train + j * words;
+      int d = 0;
+      for (std::size_t w = 0; w < words; ++w) d += __builtin_popcountll(q[w] ^ t[w]);
+      if (d < best) {
+        second = best;
+        best = d;
+        best_row = static_cast<int>(j);
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_row >= 0 && static_cast<float>(best) <= ratio * static_cast<float>(second))
+      matches.emplace_back(static_cast<int>(i), best_row, static_cast<float>(best));
+  }
+}
+
+// The rows of a descriptor matrix as whole 64-bit words, zero-padded (padding adds no distance).
+void packRows(const cv::Mat& descriptors, std::size_t words, std::vector<std::uint64_t>& out) {
+  out.assign(static_cast<std::size_t>(descriptors.rows) * words, 0);
+  const std::size_t bytes = static_cast<std::size_t>(descriptors.cols);
+  for (int r = 0; r < descriptors.rows; ++r)
+    std::memcpy(out.data() + static_cast<std::size_t>(r) * words, descriptors.ptr(r), bytes);
+}
+
+}  // namespace
+
+void ratioMatches(const cv::Mat& query, const cv::Mat& train, std::vector<cv::DMatch>& matches,
+                  float ratio) {
+  matches.clear();
+  if (query.rows < 2 || train.rows < 2) return;
+  CV_Assert(query.type() == CV_8UC1 && train.type() == CV_8UC1 && query.cols == train.cols);
+  const std::size_t words = (static_cast<std::size_t>(query.cols) + 7) / 8;
+  thread_local std::vector<std::uint64_t> packed_query, packed_train;
+  packRows(query, words, packed_query);
+  packRows(train, words, packed_train);
+  nearestTwo(packed_query.data(), static_cast<std::size_t>(query.rows), packed_train.data(),
+             static_cast<std::size_t>(train.rows), words, ratio, matches);
+}
+
+}  // namespace rgbdmap
