@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,7 @@
 #include "rgbdmap/sim/building.hpp"
 #include "rgbdmap/sim/camera_path.hpp"
 #include "rgbdmap/sim/synthetic_sequence.hpp"
+#include "rgbdmap/tracking/orb_matches.hpp"
 
 namespace {
 
@@ -146,6 +148,40 @@ void BM_PngDecodePair(benchmark::State& state) {
   state.SetLabel(ours ? "PngDecoder" : "cv::imdecode");
 }
 BENCHMARK(BM_PngDecodePair)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Ratio-test matching of two real frames' ORB descriptors (800 features each), as loop closure
+// compares a new keyframe with each remembered place near it: arg 0 OpenCV's brute-force Hamming
+// knnMatch, arg 1 ratioMatches (tracking/orb_matches.hpp), which give the same matches.
+void BM_OrbRatioMatches(benchmark::State& state) {
+  Fixture& f = fixture();
+  const auto describe = [&f](std::size_t index) {
+    const cv::Mat image = cv::imread((*f.sequence)[index].rgb_path, cv::IMREAD_GRAYSCALE);
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+    cv::ORB::create(800)->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
+    return descriptors;
+  };
+  const cv::Mat a = describe(kFrameIndex), b = describe(kFrameIndex + 2);
+  const bool ours = state.range(0) != 0;
+  std::vector<cv::DMatch> matches;
+  cv::BFMatcher opencv(cv::NORM_HAMMING);
+  for (auto _ : state) {
+    if (ours) {
+      rgbdmap::ratioMatches(a, b, matches);
+    } else {
+      matches.clear();
+      std::vector<std::vector<cv::DMatch>> knn;  // knnMatch appends to what it is given
+      opencv.knnMatch(a, b, knn, 2);
+      for (const auto& m : knn)
+        if (m.size() == 2 && m[0].distance <= 0.8f * m[1].distance) matches.push_back(m[0]);
+    }
+    benchmark::DoNotOptimize(matches.data());
+  }
+  state.SetLabel(std::string(ours ? "ratioMatches" : "cv::BFMatcher") + ", " +
+                 std::to_string(a.rows) + " x " + std::to_string(b.rows) + " descriptors, " +
+                 std::to_string(matches.size()) + " matches");
+}
+BENCHMARK(BM_OrbRatioMatches)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Range, flying-pixel and speck filtering of a 640x480 depth image. The filter works in place,
 // so each iteration starts from a copy of the raw depth (a 1.2 MB memcpy, included).

@@ -9,8 +9,9 @@
 namespace rgbdmap {
 namespace {
 
-// Descriptors of `words` 64-bit words (ORB's 32 bytes: 4); rows copied into one contiguous array
-// by the caller.
+// Descriptors of `words` 64-bit words, a multiple of 4 (ORB's 32 bytes are 4), taken four at a
+// time: four independent popcounts per step instead of a chain of one. Rows are copied into one
+// contiguous array by the caller.
 RGBDMAP_VECTOR_CLONES void nearestTwo(const std::uint64_t* query, std::size_t query_rows,
                                       const std::uint64_t* train, std::size_t train_rows,
                                       std::size_t words, float ratio,
@@ -22,7 +23,9 @@ RGBDMAP_VECTOR_CLONES void nearestTwo(const std::uint64_t* query, std::size_t qu
     for (std::size_t j = 0; j < train_rows; ++j) {
       const std::uint64_t* t = train + j * words;
       int d = 0;
-      for (std::size_t w = 0; w < words; ++w) d += __builtin_popcountll(q[w] ^ t[w]);
+      for (std::size_t w = 0; w < words; w += 4)
+        d += __builtin_popcountll(q[w] ^ t[w]) + __builtin_popcountll(q[w + 1] ^ t[w + 1]) +
+             __builtin_popcountll(q[w + 2] ^ t[w + 2]) + __builtin_popcountll(q[w + 3] ^ t[w + 3]);
       if (d < best) {
         second = best;
         best = d;
@@ -51,7 +54,7 @@ void ratioMatches(const cv::Mat& query, const cv::Mat& train, std::vector<cv::DM
   matches.clear();
   if (query.rows < 2 || train.rows < 2) return;
   CV_Assert(query.type() == CV_8UC1 && train.type() == CV_8UC1 && query.cols == train.cols);
-  const std::size_t words = (static_cast<std::size_t>(query.cols) + 7) / 8;
+  const std::size_t words = (static_cast<std::size_t>(query.cols) + 31) / 32 * 4;
   thread_local std::vector<std::uint64_t> packed_query, packed_train;
   packRows(query, words, packed_query);
   packRows(train, words, packed_train);
