@@ -224,9 +224,7 @@ std::string writeOnce(const std::string& folder,
   if (!fs::exists(done)) {
     // Written under a private name and renamed into place when complete: a writer cut short
     // leaves nothing a later test would take for the whole.
-    const std::string mine = folder + "." + std::to_string(::getpid());
-    fs::remove_all(mine);
-    fs::create_directories(mine);
+    const std::string mine = emptied(folder + "." + std::to_string(::getpid()));
     write(mine);
     if (!::testing::Test::HasFatalFailure()) {
       std::ofstream(mine + "/.complete") << "\n";
