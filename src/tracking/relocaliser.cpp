@@ -74,11 +74,6 @@ void Relocaliser::describePrepared(const cv::Mat& depth, RelocalisationView& vie
   attachPoints(current_keypoints_, current_descriptors_, depth, view);
 }
 
-void Relocaliser::ratioMatches(const RelocalisationView& keyframe,
-                               std::vector<cv::DMatch>& matches) const {
-  rgbdmap::ratioMatches(keyframe.descriptors, current_descriptors_, matches);
-}
-
 int Relocaliser::similarity(RelocalisationView& keyframe) {
   if (!keyframe.described) describe(keyframe);
   return similarity(static_cast<const RelocalisationView&>(keyframe));
@@ -86,7 +81,7 @@ int Relocaliser::similarity(RelocalisationView& keyframe) {
 
 int Relocaliser::similarity(const RelocalisationView& keyframe) {
   std::vector<cv::DMatch> matches;
-  ratioMatches(keyframe, matches);
+  ratioMatches(keyframe.descriptors, current_descriptors_, matches);
   return static_cast<int>(matches.size());
 }
 
@@ -100,7 +95,7 @@ std::optional<Eigen::Isometry3d> Relocaliser::locate(const RelocalisationView& k
   if (keyframe.descriptors.rows < min_inliers_ || current_descriptors_.rows < min_inliers_)
     return std::nullopt;
   std::vector<cv::DMatch> matches;
-  ratioMatches(keyframe, matches);
+  ratioMatches(keyframe.descriptors, current_descriptors_, matches);
   std::vector<cv::Point3f> object;
   std::vector<cv::Point2f> image;
   for (const cv::DMatch& m : matches) {

@@ -56,7 +56,6 @@ class Relocaliser {
   // Keeps the keypoints with a depth in range, as 3-D points with their descriptor rows.
   void attachPoints(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& descriptors,
                     const cv::Mat& depth, RelocalisationView& view) const;
-  void ratioMatches(const RelocalisationView& keyframe, std::vector<cv::DMatch>& matches) const;
 
   CameraIntrinsics camera_;
   int min_inliers_;
