@@ -11,6 +11,7 @@
 #include "rgbdmap/capture/trajectory.hpp"
 #include "rgbdmap/sessions/fleet_merger.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
+#include "test_support.hpp"
 
 namespace rgbdmap::test {
 
@@ -21,6 +22,8 @@ void mapTo(const std::string& sequence, const std::string& map);
 // The session of `sequence` (a shared TUM folder's name) mapped by mapTo(), once per test process
 // (CTest runs each test in a process of its own, in parallel: each maps into a folder of its own).
 const Session& mappedSession(const std::string& tum_name);
+// mappedSession() of fr1/rpy's first 100 frames (kRpy).
+inline const Session& rpySession() { return mappedSession(kRpy); }
 
 struct SessionRun {
   int code = 0;

@@ -15,7 +15,7 @@ namespace rgbdmap {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::kXyz;
 
 struct Outcome {
   int exit_code;

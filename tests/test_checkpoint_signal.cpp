@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
 
 std::vector<std::string> replayArgs(const std::string& dir, const std::string& rate) {
   return {test::binary(),

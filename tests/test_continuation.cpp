@@ -21,8 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::kRpy;
+using test::kXyz;
 
 Trajectory graphOf(const std::string& session) { return graphTrajectory(readSession(session)); }
 

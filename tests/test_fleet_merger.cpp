@@ -13,7 +13,7 @@
 namespace rgbdmap {
 namespace {
 
-const Session& rpySession() { return test::mappedSession("rgbd_dataset_freiburg1_rpy_head100"); }
+using test::rpySession;
 
 // The session moved into another frame (a second robot starting elsewhere in the same place).
 Session movedSession(const Session& s, const Eigen::Isometry3d& frame) {

@@ -64,7 +64,7 @@ cv::Mat render(const CameraIntrinsics& c, const Eigen::Isometry3d& pose,
   return depth;
 }
 
-cv::Mat grey(const CameraIntrinsics& c) {
+cv::Mat uniformColour(const CameraIntrinsics& c) {
   return cv::Mat(c.height, c.width, CV_8UC3, cv::Scalar(90, 120, 150));
 }
 
@@ -100,13 +100,13 @@ std::pair<double, double> grazingFloor(double min_incidence_cosine, int far_fram
   for (int i = 0; i < 10; ++i) {
     const Eigen::Isometry3d pose =
         lookAt(Eigen::Vector3d(sway(rng), 2.1 + sway(rng), 1.2 + sway(rng)), target);
-    tsdf.integrate(render(c, pose, {kFloor}, rng), grey(c), pose, map);
+    tsdf.integrate(render(c, pose, {kFloor}, rng), uniformColour(c), pose, map);
   }
   const double close = floorCoverage(map);
   for (int i = 0; i < far_frames; ++i) {
     const Eigen::Isometry3d pose = lookAt(Eigen::Vector3d(sway(rng), sway(rng), 1.5 + sway(rng)),
                                           Eigen::Vector3d(0, 3.3, 0.3));
-    tsdf.integrate(render(c, pose, {kFloor}, rng), grey(c), pose, map);
+    tsdf.integrate(render(c, pose, {kFloor}, rng), uniformColour(c), pose, map);
   }
   return {close, floorCoverage(map)};
 }
@@ -148,7 +148,7 @@ TEST(FreeSpace, AnObjectThatWentAwayIsCarved) {
   auto view = [&](const std::vector<Patch>& scene) {
     const Eigen::Isometry3d pose =
         lookAt(Eigen::Vector3d(sway(rng), sway(rng), 1.1 + sway(rng)), Eigen::Vector3d(0, 4, 1.1));
-    tsdf.integrate(render(c, pose, scene, rng), grey(c), pose, map);
+    tsdf.integrate(render(c, pose, scene, rng), uniformColour(c), pose, map);
   };
   for (int i = 0; i < 30; ++i) view({wall, box});
   const int before = boxPoints();

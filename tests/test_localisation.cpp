@@ -17,8 +17,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::kRpy;
+using test::kXyz;
 
 TEST(Localisation, RealFramesOfAnotherSequenceArePosedInTheSavedDesksFrame) {
   // fr1/xyz looks at the desk fr1/rpy was mapped from; both have the motion capture's poses in

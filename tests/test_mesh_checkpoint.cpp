@@ -12,7 +12,7 @@
 namespace rgbdmap {
 namespace {
 
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::kXyz;
 
 TEST(MeshCheckpoint, FinalSaveWritesAMeshThatLoads) {
   const std::string dir = test::freshDir();

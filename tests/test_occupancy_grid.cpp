@@ -24,7 +24,7 @@
 namespace rgbdmap {
 namespace {
 
-constexpr double kDegree = M_PI / 180.0;
+constexpr double kOneDegree = M_PI / 180.0;
 
 double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
@@ -58,18 +58,18 @@ void addWall(MapCloud& cloud, double x, double y0, double y1, double step = 0.02
 TEST(FloorFinder, FindsTheTiltedFloorUnderATableFromAPoorGuessOfUp) {
   // A floor tilted 2 degrees about y, a large table top 0.75 m above it and a wall; cameras at
   // 1.5 m. The guess of up is 30 degrees off (a camera looking down at the table).
-  const double slope = std::tan(2.0 * kDegree);
+  const double slope = std::tan(2.0 * kOneDegree);
   MapCloud map;
   addPatch(map, -2.0, 2.0, -2.0, 2.0, slope, 0.0, 0.0);   // floor: 40k points
   addPatch(map, -0.5, 1.0, -0.5, 0.5, slope, 0.0, 0.75);  // table top: 3.8k points
   addWall(map, 2.0, -2.0, 2.0);
   const Eigen::Vector3d guess =
-      Eigen::AngleAxisd(30.0 * kDegree, Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitZ();
+      Eigen::AngleAxisd(30.0 * kOneDegree, Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitZ();
   const std::optional<FloorPlane> floor =
       FloorFinder{}.find(map, guess, {Eigen::Vector3d(0, 0, 1.5), Eigen::Vector3d(1, 0, 1.6)});
   ASSERT_TRUE(floor.has_value());
   const Eigen::Vector3d truth = Eigen::Vector3d(-slope, 0.0, 1.0).normalized();
-  EXPECT_LT(angleBetween(floor->up, truth), 0.1 * kDegree);
+  EXPECT_LT(angleBetween(floor->up, truth), 0.1 * kOneDegree);
   EXPECT_NEAR(floor->heightOf(Eigen::Vector3d(0, 0, 0)), 0.0, 0.005);
   EXPECT_GT(floor->support, 30000u);
 }
@@ -219,7 +219,7 @@ TEST(OccupancyGrid, DrawsTheSyntheticRoomsFloorPlan) {
           .alignment;
   const Eigen::Isometry3d scene_from_grid = scene_from_map * grid.map_from_grid;
   const Eigen::Vector3d up = scene_from_grid.linear().col(2);
-  EXPECT_LT(angleBetween(up, Eigen::Vector3d::UnitZ()), 1.0 * kDegree);
+  EXPECT_LT(angleBetween(up, Eigen::Vector3d::UnitZ()), 1.0 * kOneDegree);
   EXPECT_NEAR(scene_from_grid.translation().z(), 0.0, 0.02);
 
   // The truth: the cells of the surfaces the camera saw, in the height band (occupied) and on the
@@ -290,9 +290,9 @@ TEST(AccelerometerLog, GivesUpInTheCameraFrameOfTheRealKinect) {
     }
     ASSERT_GT(samples, 50) << name;
     const double angle = angleBetween(sum, Eigen::Vector3d::UnitZ());
-    std::cout << name << ": accelerometer up " << angle / kDegree
+    std::cout << name << ": accelerometer up " << angle / kOneDegree
               << " degrees from the motion capture's z over " << samples << " poses\n";
-    EXPECT_LT(angle, 5.0 * kDegree) << name;
+    EXPECT_LT(angle, 5.0 * kOneDegree) << name;
   }
 }
 

@@ -14,7 +14,7 @@
 namespace rgbdmap {
 namespace {
 
-constexpr int kFrames = 90;  // 3 s, a quarter turn around the room
+constexpr int kQuarterTurnFrames = 90;  // 3 s, a quarter turn around the room
 
 // Maps `source` with odometry, every frame a keyframe; returns the run's --stats JSON.
 std::string mapWithOdometry(const std::string& source, const std::string& dir) {
@@ -34,12 +34,13 @@ TEST(Odometry, TracksASyntheticRoomToMillimetres) {
   const std::string dir = test::freshDir();
   std::string output;
   ASSERT_EQ(test::run(test::binary() + " synth --out " + dir + "/room --frames " +
-                          std::to_string(kFrames),
+                          std::to_string(kQuarterTurnFrames),
                       &output),
             0)
       << output;
   const std::string stats = mapWithOdometry("tum:" + dir + "/room", dir);
-  EXPECT_EQ(test::jsonNumber(stats, "keyframes"), kFrames) << "frames lost by tracking: " << stats;
+  EXPECT_EQ(test::jsonNumber(stats, "keyframes"), kQuarterTurnFrames)
+      << "frames lost by tracking: " << stats;
 
   const Trajectory estimate = Trajectory::load(dir + "/map_keyframes.txt");
   const Trajectory groundtruth = Trajectory::load(dir + "/room/groundtruth.txt");

@@ -33,8 +33,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string oniFile() { return test::dataDir() + "/oni/kinect_v1_12frames.oni"; }
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
+using test::kXyz;
 
 // A counter from `--stats` JSON ("name": value).
 double statValue(const std::string& json, const std::string& name) {

@@ -25,7 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::kXyz;
 const std::string kFakenectDir = "/usr/lib/x86_64-linux-gnu/fakenect";
 
 bool kinectDriverBuilt() {

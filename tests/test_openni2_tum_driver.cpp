@@ -36,8 +36,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
+using test::kXyz;
 const std::string kMissingListed = "/no/such/rgbd_dataset_listed";
 
 // One frame read through OpenNI2, copied out of its buffer at once (OpenNI2

@@ -12,7 +12,7 @@
 namespace rgbdmap {
 namespace {
 
-const Session& rpySession() { return test::mappedSession("rgbd_dataset_freiburg1_rpy_head100"); }
+using test::rpySession;
 
 // A place with every point (features and dense reference) moved by `motion`: the same spot seen
 // from a camera at motion^-1.

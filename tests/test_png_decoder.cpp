@@ -27,8 +27,8 @@ using Bytes = std::vector<std::uint8_t>;
 using Mode = PngDecoder::Mode;
 using Status = PngDecoder::Status;
 
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
+using test::kXyz;
 
 Bytes readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
 
 // Maps fr1/rpy's 100 frames with odometry and loop closure (the default for a camera), once.
 const std::string& mappedRun() {

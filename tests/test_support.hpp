@@ -8,6 +8,10 @@
 
 namespace rgbdmap::test {
 
+// The real sequences of ../shared/data/tum that most tests read.
+inline const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+inline const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+
 // ../shared/data (the real TUM frames and the .oni recording).
 std::string dataDir();
 std::string tumDir(const std::string& name);  // dataDir()/tum/<name>

@@ -16,10 +16,10 @@
 namespace rgbdmap {
 namespace {
 
-const Eigen::Vector3d kLargeRoom(8.0, 6.0, 3.0);
+const Eigen::Vector3d kRoomSize(8.0, 6.0, 3.0);
 
 TEST(WalkPath, ComesBackEveryLapAndKeepsClearOfEverySurface) {
-  const SyntheticScene scene = SyntheticScene::defaultRoom(kLargeRoom);
+  const SyntheticScene scene = SyntheticScene::defaultRoom(kRoomSize);
   SyntheticSequenceOptions options;
   options.path = "walk";
   options.loop_seconds = 15.0;
@@ -48,7 +48,7 @@ TEST(WalkPath, ComesBackEveryLapAndKeepsClearOfEverySurface) {
 }
 
 TEST(LinePath, NeverComesBack) {
-  const SyntheticScene scene = SyntheticScene::defaultRoom(kLargeRoom);
+  const SyntheticScene scene = SyntheticScene::defaultRoom(kRoomSize);
   SyntheticSequenceOptions options;
   options.path = "line";
   const double duration = 10.0;

@@ -94,8 +94,8 @@ int count(const Tracked& t, TrackingState s) {
   return static_cast<int>(std::count(t.states.begin(), t.states.end(), s));
 }
 
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
+using test::kXyz;
 
 TEST(Tracking, Fr1XyzEveryFrame) {
   const std::string folder = test::tumDir(kXyz);

@@ -10,8 +10,8 @@
 namespace rgbdmap {
 namespace {
 
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
+using test::kRpy;
+using test::kXyz;
 
 TEST(Association, FollowsTumsGreedyRule) {
   // Candidates by difference: (a1,b0) 0.002, (a0,b0) 0.008, (a1,b1) 0.015. The closest pair is

@@ -22,8 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-const std::string kRpy = "rgbd_dataset_freiburg1_rpy_head100";
-const std::string kXyz = "rgbd_dataset_freiburg1_xyz";
+using test::kRpy;
+using test::kXyz;
 using test::XWindow;
 
 MapCloud line(int n) {
