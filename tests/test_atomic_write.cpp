@@ -125,12 +125,11 @@ TEST(AtomicWrite, FileSizeLimitMidRunIsReportedAndTheLastCheckpointLoads) {
   std::string output;
   // 2 MB (4096 blocks of 512 bytes): the first checkpoints (under ~125,000 points) fit, the
   // full map (~330,000 points, 5 MB) does not.
-  const int code = test::run(
-      "ulimit -f 4096 && exec " + test::binary() +
-          " --source tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100") + " --out " + path +
-          " --rate max -q --no-render --set checkpoint.every_keyframes=1"
-          " --set checkpoint.min_seconds=0 --set checkpoint.store=false",
-      &output);
+  const int code = test::run("ulimit -f 4096 && exec " + test::binary() +
+                                 " --source tum:" + test::tumDir(test::kRpy) + " --out " + path +
+                                 " --rate max -q --no-render --set checkpoint.every_keyframes=1"
+                                 " --set checkpoint.min_seconds=0 --set checkpoint.store=false",
+                             &output);
   EXPECT_EQ(code, 1) << output;
   EXPECT_NE(output.find("checkpoint failed, mapping goes on: " + path + ": cannot write " + path +
                         ".tmp-"),

@@ -63,7 +63,7 @@ TEST(PngEncoder, EveryImageTypeReadsBackExactlyWithOpenCv) {
 }
 
 TEST(PngEncoder, RecordedFramesRoundTripAndCompressLikeOpenCv) {
-  const std::string folder = test::tumDir("rgbd_dataset_freiburg1_xyz");
+  const std::string folder = test::tumDir(test::kXyz);
   std::size_t ours = 0, theirs = 0;
   PngEncoder encoder(1);
   int images = 0;

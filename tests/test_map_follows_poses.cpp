@@ -157,7 +157,7 @@ TEST(MapFollowsPoses, APassShowsTheMapItBeganFromAndHoldsOneTsdf) {
 // up to the budget and no more (a soak at rest once grew 10 MB a minute); a viewpoint seen once
 // is kept while copies of the crowded one are let go.
 TEST(KeptKeyframes, ACameraAtRestStaysWithinBudgetAndAViewSeenOnceIsKept) {
-  const std::string folder = test::tumDir("rgbd_dataset_freiburg1_xyz");
+  const std::string folder = test::tumDir(test::kXyz);
   Config config;
   config.loadPreset(TumSequence::presetForFolder(folder));
   config.refusion.keyframe_memory = 2.0;  // MB: about ten keyframes

@@ -39,11 +39,10 @@ TEST(MeshCheckpoint, FinalSaveWritesAMeshThatLoads) {
 
 TEST(MeshCheckpoint, Sigusr1WritesTheMeshWhileMapping) {
   const std::string dir = test::freshDir();
-  test::Process p(
-      {test::binary(), "--source", "tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100"),
-       "--out", dir + "/map.pcd", "--mesh", dir + "/mesh.ply", "--rate", "0.5", "--no-render",
-       "--set", "checkpoint.every_keyframes=0", "--set", "checkpoint.every_seconds=0"},
-      dir + "/log.txt");
+  test::Process p({test::binary(), "--source", "tum:" + test::tumDir(test::kRpy), "--out",
+                   dir + "/map.pcd", "--mesh", dir + "/mesh.ply", "--rate", "0.5", "--no-render",
+                   "--set", "checkpoint.every_keyframes=0", "--set", "checkpoint.every_seconds=0"},
+                  dir + "/log.txt");
   ASSERT_GT(p.pid(), 0);
   ASSERT_TRUE(test::waitUntil(
       [&] { return test::readFile(dir + "/log.txt").find("poses:") != std::string::npos; }, 60));

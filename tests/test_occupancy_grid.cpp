@@ -276,7 +276,7 @@ TEST(OccupancyGrid, DrawsTheSyntheticRoomsFloorPlan) {
 // TUM's Kinect accelerometer against the motion-capture ground truth, whose z is up: the axes
 // upInCamera() assumes put the accelerometer's up within a few degrees of it on every excerpt.
 TEST(AccelerometerLog, GivesUpInTheCameraFrameOfTheRealKinect) {
-  for (const char* name : {"rgbd_dataset_freiburg1_xyz", "rgbd_dataset_freiburg1_rpy_head100"}) {
+  for (const std::string& name : {test::kXyz, test::kRpy}) {
     const std::string folder = test::tumDir(name);
     const AccelerometerLog log = AccelerometerLog::load(folder + "/accelerometer.txt");
     const Trajectory truth = Trajectory::load(folder + "/groundtruth.txt");
@@ -312,9 +312,8 @@ TEST(AccelerometerLog, RefusesABadLineNamingIt) {
 TEST(GroundFrame, FloorOfARealMapAgreesWithTheAccelerometer) {
   const std::string dir = test::freshDir();
   std::string output;
-  ASSERT_EQ(test::run(test::binary() +
-                          " --source tum:" + test::tumDir("rgbd_dataset_freiburg1_rpy_head100") +
-                          " --out " + dir + "/map.pcd --grid " + dir +
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(test::kRpy) + " --out " +
+                          dir + "/map.pcd --grid " + dir +
                           "/grid.pgm --rate max --set pose.source=odometry -q --no-render",
                       &output),
             0)

@@ -67,7 +67,7 @@ TEST(Odometry, TracksASyntheticRoomToMillimetres) {
 
 TEST(Odometry, TracksTheRealFr1XyzFrames) {
   const std::string dir = test::freshDir();
-  const std::string folder = test::tumDir("rgbd_dataset_freiburg1_xyz");
+  const std::string folder = test::tumDir(test::kXyz);
   const std::string stats = mapWithOdometry("tum:" + folder, dir);
   EXPECT_EQ(test::jsonNumber(stats, "keyframes"), 32) << stats;
   const Trajectory estimate = Trajectory::load(dir + "/map_keyframes.txt");

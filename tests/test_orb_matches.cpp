@@ -45,7 +45,7 @@ cv::Mat orbOf(const std::string& path) {
 }
 
 TEST(OrbMatches, AsOpenCvMatchesOnRealFrames) {
-  const std::string rgb = test::tumDir("rgbd_dataset_freiburg1_xyz") + "/rgb/";
+  const std::string rgb = test::tumDir(test::kXyz) + "/rgb/";
   const cv::Mat a = orbOf(rgb + "1305031102.175304.png");
   const cv::Mat b = orbOf(rgb + "1305031102.243211.png");
   ASSERT_GT(a.rows, 300);

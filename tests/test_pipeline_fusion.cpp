@@ -32,7 +32,7 @@ struct Fixture {
 // The first `n` frames of fr1/xyz with their ground-truth poses.
 Fixture loadFrames(std::size_t n) {
   Fixture f;
-  const std::string folder = test::tumDir("rgbd_dataset_freiburg1_xyz");
+  const std::string folder = test::tumDir(test::kXyz);
   f.config.loadPreset(TumSequence::presetForFolder(folder));
   TumSequence sequence(folder);
   for (std::size_t i = 0; i < n; ++i) {

@@ -98,7 +98,7 @@ double agreementWithOtherFrames(const std::string& sequence, const MapCloud& map
 
 TEST(PipelineReplay, Fr1XyzEndToEnd) {
   const std::string dir = test::freshDir();
-  const Replay r = replay("rgbd_dataset_freiburg1_xyz", dir);
+  const Replay r = replay(test::kXyz, dir);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(statValue(r.stats, "frames_captured"), 32);  // 32 associated pairs
   EXPECT_EQ(statValue(r.stats, "frames_processed"), 32);
@@ -108,8 +108,7 @@ TEST(PipelineReplay, Fr1XyzEndToEnd) {
   EXPECT_EQ(statValue(r.stats, "map_points"), static_cast<long>(r.map.size()));
   EXPECT_GT(r.map.size(), 20000u);  // one layer per surface: measured 24k (4 keyframes)
   expectDistinctVoxels(r.map, 0.01);
-  const double agreement =
-      agreementWithOtherFrames("rgbd_dataset_freiburg1_xyz", r.map, r.keyframes, 0.02);
+  const double agreement = agreementWithOtherFrames(test::kXyz, r.map, r.keyframes, 0.02);
   std::cout << "fr1/xyz: non-keyframe pixels within 2 cm of the map: " << agreement << "\n";
   EXPECT_GT(agreement, 0.85);
   // The side outputs exist: the effective configuration and a picture.
@@ -119,14 +118,13 @@ TEST(PipelineReplay, Fr1XyzEndToEnd) {
 
 TEST(PipelineReplay, Fr1RpyHead100EndToEnd) {
   const std::string dir = test::freshDir();
-  const Replay r = replay("rgbd_dataset_freiburg1_rpy_head100", dir);
+  const Replay r = replay(test::kRpy, dir);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(statValue(r.stats, "frames_captured"), 100);
   EXPECT_EQ(statValue(r.stats, "keyframes"), 10);
   EXPECT_EQ(statValue(r.stats, "frames_without_pose"), 0);
   expectDistinctVoxels(r.map, 0.01);
-  const double agreement =
-      agreementWithOtherFrames("rgbd_dataset_freiburg1_rpy_head100", r.map, r.keyframes, 0.02);
+  const double agreement = agreementWithOtherFrames(test::kRpy, r.map, r.keyframes, 0.02);
   std::cout << "fr1/rpy: non-keyframe pixels within 2 cm of the map: " << agreement << "\n";
   // Measured 0.80 with 10 keyframes: a surface is mapped where its zero crossing was seen from
   // both sides of the band; the point map (0.85) also covered the noise around it.
@@ -135,8 +133,7 @@ TEST(PipelineReplay, Fr1RpyHead100EndToEnd) {
 
 TEST(PipelineReplay, KeyframeEveryFrameAndFineVoxels) {
   const std::string dir = test::freshDir();
-  const Replay r = replay("rgbd_dataset_freiburg1_xyz", dir,
-                          "--set keyframe.every_n=1 --set map.voxel_size=0.005");
+  const Replay r = replay(test::kXyz, dir, "--set keyframe.every_n=1 --set map.voxel_size=0.005");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(statValue(r.stats, "keyframes"), 32);
   expectDistinctVoxels(r.map, 0.005);
@@ -148,8 +145,8 @@ TEST(PipelineReplay, TwoReplaysGiveIdenticalMaps) {
   const std::string a = dir + "/a", b = dir + "/b";
   std::filesystem::create_directories(a);
   std::filesystem::create_directories(b);
-  const Replay ra = replay("rgbd_dataset_freiburg1_xyz", a, "--set keyframe.every_n=3");
-  const Replay rb = replay("rgbd_dataset_freiburg1_xyz", b, "--set keyframe.every_n=3");
+  const Replay ra = replay(test::kXyz, a, "--set keyframe.every_n=3");
+  const Replay rb = replay(test::kXyz, b, "--set keyframe.every_n=3");
   ASSERT_EQ(ra.exit_code, 0);
   ASSERT_EQ(rb.exit_code, 0);
   EXPECT_EQ(test::readFile(a + "/map.pcd"), test::readFile(b + "/map.pcd"));

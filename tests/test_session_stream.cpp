@@ -17,7 +17,7 @@
 namespace rgbdmap {
 namespace {
 
-const Session& savedSession() { return test::mappedSession("rgbd_dataset_freiburg1_rpy_head100"); }
+using test::rpySession;
 
 // A loop closer going on from the saved session: its graph and places are the session's.
 struct Robot {
@@ -34,7 +34,7 @@ bool samePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 }
 
 TEST(SessionStream, AMergerAssemblesTheRobotsGraphAndPlaces) {
-  const Session& saved = savedSession();
+  const Session& saved = rpySession();
   ASSERT_GE(saved.graph.keyframes.size(), 10u);
   Robot robot(saved);
   SessionStream stream(42, saved.camera, SessionStream::Options{1e12, 1.0});
@@ -85,7 +85,7 @@ TEST(SessionStream, AMergerAssemblesTheRobotsGraphAndPlaces) {
 }
 
 TEST(SessionStream, MapPiecesGoOnceTheirAnchorHasAndArriveWhole) {
-  const Session& saved = savedSession();
+  const Session& saved = rpySession();
   ASSERT_GE(saved.keyframes.size(), 5u);
   Robot robot(saved);
   SessionStream stream(3, saved.camera, SessionStream::Options{1e12, 1.0, 1e12, 0.0});
@@ -138,7 +138,7 @@ TEST(SessionStream, MapPiecesGoOnceTheirAnchorHasAndArriveWhole) {
 }
 
 TEST(SessionStream, StaysWithinItsByteBudget) {
-  const Session& saved = savedSession();
+  const Session& saved = rpySession();
   Robot robot(saved);
   const double rate = 100e3;
   SessionStream stream(7, saved.camera, SessionStream::Options{rate, 1.0});
@@ -166,7 +166,7 @@ TEST(SessionStream, StaysWithinItsByteBudget) {
 }
 
 TEST(SessionStream, ARestartedStreamAddsNothingTwiceAndANewRunReplacesTheOld) {
-  const Session& saved = savedSession();
+  const Session& saved = rpySession();
   Robot robot(saved);
   SessionStream stream(1, saved.camera, SessionStream::Options{1e12, 1.0});
   SessionAssembler merger;
@@ -190,7 +190,7 @@ TEST(SessionStream, ARestartedStreamAddsNothingTwiceAndANewRunReplacesTheOld) {
 }
 
 TEST(SessionStream, ADamagedOrForeignRecordIsRefusedNamingItsTopic) {
-  const Session& saved = savedSession();
+  const Session& saved = rpySession();
   Robot robot(saved);
   SessionStream stream(1, saved.camera, SessionStream::Options{1e12, 1.0});
   const auto records = stream.take(robot.closer, 0.0);

@@ -146,7 +146,7 @@ TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
 
 TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
   test::mapTo(second_, dir_ + "/b.pcd");
-  test::mapTo(test::tumDir("rgbd_dataset_freiburg1_xyz"), dir_ + "/c.pcd");  // a real desk
+  test::mapTo(test::tumDir(test::kXyz), dir_ + "/c.pcd");  // a real desk
   const std::vector<std::string> sessions = {dir_ + "/a.session", dir_ + "/b.session",
                                              dir_ + "/c.session"};
   const test::MergeRun merge = test::mergeSessions(sessions, dir_ + "/merged.pcd");
@@ -179,7 +179,7 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   // must place it (PlaceMatcher: PnP, dense alignment to the view drawn from the reference,
   // agreement of two or more).
   test::mapTo(second_, dir_ + "/b.pcd");
-  test::mapTo(test::tumDir("rgbd_dataset_freiburg1_xyz"), dir_ + "/c.pcd");  // a real desk
+  test::mapTo(test::tumDir(test::kXyz), dir_ + "/c.pcd");  // a real desk
   const Session a = test::streamed(readSession(dir_ + "/a.session"));
   const Session b = test::streamed(readSession(dir_ + "/b.session"));
   const Session c = test::streamed(readSession(dir_ + "/c.session"));
