@@ -69,12 +69,17 @@ void TrajectoryStream::record(double timestamp, const Eigen::Isometry3d& pose,
 }
 
 bool TrajectoryStream::append(const std::string& file, const std::vector<Entry>& entries,
-                              bool with_anchor, bool truncate, std::string& error) {
+                              bool with_anchor, bool replace, std::string& error) {
   std::string text;
-  if (truncate && !with_anchor) text = kTumPoseHeader;
+  if (replace && !with_anchor) text = kTumPoseHeader;
   for (const Entry& e : entries)
     formatLine(text, e.timestamp, e.pose, with_anchor ? &e.anchor : nullptr);
-  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (truncate ? O_TRUNC : O_APPEND);
+  // The first write replaces what an earlier run left. The trajectory itself is renamed into
+  // place whole, so that a reader never finds it emptied (truncated in place, it would be until
+  // the write ends); the spool, which only this run reads, is truncated. Later writes only add
+  // lines.
+  if (replace && !with_anchor) return writeBytesAtomically(file, text, error);
+  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (replace ? O_TRUNC : O_APPEND);
   const int fd = ::open(file.c_str(), flags, 0644);
   if (fd < 0) {
     error = failure(file, "cannot open");
@@ -122,9 +127,9 @@ bool TrajectoryStream::persist(std::string& error) {
     std::lock_guard<std::mutex> lock(mutex_);
     entries.swap(pending_);
   }
-  const bool truncate = !started_;
+  const bool replace = !started_;
   const bool ok =
-      append(corrections_ ? spool_ : path_, entries, corrections_ != nullptr, truncate, error);
+      append(corrections_ ? spool_ : path_, entries, corrections_ != nullptr, replace, error);
   if (!ok) {
     // Keep them for the next try, in order.
     std::lock_guard<std::mutex> lock(mutex_);

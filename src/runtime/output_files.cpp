@@ -45,9 +45,9 @@ std::string storePathOf(const std::string& map_path) { return stem(map_path) + "
 
 std::string picturePathOf(const std::string& map_path) { return stem(map_path) + ".png"; }
 
-// The map, the mesh and the grid are written atomically; a trajectory is appended to in place, or,
-// with loop closure, spooled and rewritten atomically. The effective configuration is written once,
-// before mapping, and needs no temporary file.
+// The map, the mesh and the grid are written atomically; a trajectory is written atomically first,
+// then appended to in place, or, with loop closure, spooled and rewritten atomically. The
+// effective configuration is written once, before mapping, and needs no temporary file.
 std::vector<std::string> temporaryFiles(const PipelineOutputs& outputs) {
   std::vector<std::string> files;
   for (const std::string* path : {&outputs.map_path, &outputs.mesh_path, &outputs.octomap_path})

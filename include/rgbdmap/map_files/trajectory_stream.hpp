@@ -30,7 +30,7 @@ std::string spoolFileOf(const std::string& trajectory_path);
 // only the poses recorded since the last checkpoint. Poses are recorded from one thread (tracking
 // or fusion) and written by another (the checkpoint writer) with persist():
 // - without loop closure (`corrections` null) the new lines are appended to the file itself and
-//   made durable (fdatasync);
+//   made durable (fdatasync); the first persist() writes it whole (temp file, fsync, rename);
 // - with it, poses move whenever a loop closes, so the poses as tracked are appended with their
 //   anchors to a spool file beside it ("<path>.anchored"), and the file is rewritten from the
 //   spool with the latest corrections (temp file, fsync, rename). The spool is removed when the
@@ -56,7 +56,7 @@ class TrajectoryStream : public PoseSink {
  private:
   using Entry = AnchoredPose;
   bool append(const std::string& file, const std::vector<Entry>& entries, bool with_anchor,
-              bool truncate, std::string& error);
+              bool replace, std::string& error);
   bool rewriteFromSpool(std::string& error);
 
   std::string path_;
@@ -64,7 +64,7 @@ class TrajectoryStream : public PoseSink {
   const PoseCorrections* corrections_;
   mutable std::mutex mutex_;
   std::vector<Entry> pending_;  // recorded, not yet written
-  bool started_ = false;        // the first persist() truncates what an earlier run left
+  bool started_ = false;        // the first persist() replaces what an earlier run left
 };
 
 }  // namespace rgbdmap
