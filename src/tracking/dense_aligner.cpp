@@ -4,25 +4,43 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
+#include "rgbdmap/base/vector_clones.hpp"
 #include "rgbdmap/tracking/twist.hpp"
 
 namespace rgbdmap {
 namespace {
 
-using Vector6f = Eigen::Matrix<float, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-using Residual = DenseAligner::Residual;
+using Residuals = DenseAligner::Residuals;
 
-// Jacobian row of a residual whose gradient with respect to the warped point p is g:
-// (g, p x g) for a left increment (translation, rotation). Scalar code: gcc's array-bounds
-// analysis misreads Eigen's vectorised 3-vector cross product.
-Vector6f jacobianRow(const Eigen::Vector3f& p, float gx, float gy, float gz) {
-  Vector6f j;
-  j << gx, gy, gz, p.y() * gz - p.z() * gy, p.z() * gx - p.x() * gz, p.x() * gy - p.y() * gx;
-  return j;
+// The 8 lanes the normal equations are summed in (GCC's vector extension: one AVX register in
+// the x86-64-v3 clone, two SSE ones in the baseline).
+constexpr std::size_t kLanes = 8;
+using Lanes = float __attribute__((vector_size(4 * kLanes)));
+
+// (Vectors pass by reference: by value, the baseline and the AVX clone would disagree on how.)
+[[gnu::always_inline]] inline void load(Lanes& v, const float* p) { std::memcpy(&v, p, sizeof(v)); }
+
+[[gnu::always_inline]] inline float laneSum(const Lanes& v) {
+  float s = 0;
+  for (std::size_t i = 0; i < kLanes; ++i) s += v[i];
+  return s;
+}
+
+// Stores the Jacobian row of a residual whose gradient with respect to the warped point p is g,
+// (g, p x g) for a left increment (translation, rotation), at row m of the columns j.
+inline void storeJacobianRow(std::vector<float> (&j)[6], std::size_t m, const Eigen::Vector3f& p,
+                             float gx, float gy, float gz) {
+  j[0][m] = gx;
+  j[1][m] = gy;
+  j[2][m] = gz;
+  j[3][m] = p.y() * gz - p.z() * gy;
+  j[4][m] = p.z() * gx - p.x() * gz;
+  j[5][m] = p.x() * gy - p.y() * gx;
 }
 
 // Robust spread (1.4826 * median absolute value) of every 4th value, which is plenty.
@@ -33,14 +51,10 @@ float robustSigma(std::vector<float>& values, float fallback) {
   return std::max(1.4826f * *mid, 1e-6f);
 }
 
-float huberWeight(float r_over_sigma, float k) {
-  const float a = std::abs(r_over_sigma);
-  return a <= k ? 1.0f : k / a;
-}
-
 // Bilinear lookup of all sampled quantities at (u, v); false when a depth corner is missing
 // (then only the intensity part, which is never missing, is valid: depth fields are zeroed).
-PixelSample bilinear(const PyramidLevel& level, float u, float v, bool& depth_ok) {
+[[gnu::always_inline]] inline PixelSample bilinear(const PyramidLevel& level, float u, float v,
+                                                   bool& depth_ok) {
   const int x = static_cast<int>(u), y = static_cast<int>(v);
   const float ax = u - static_cast<float>(x), ay = v - static_cast<float>(y);
   const std::size_t w = static_cast<std::size_t>(level.camera.width);
@@ -57,12 +71,15 @@ PixelSample bilinear(const PyramidLevel& level, float u, float v, bool& depth_ok
 // The residuals of the reference's `points` (x, y, z, intensity) moved by (R, t) into `level`,
 // each with its Jacobian rows; every 4th point's absolute residuals go to abs_i and abs_z (for
 // the robust scales). With `quadratic_noise`, depth residuals and their rows are divided by z^2.
-void residualsAt(const AlignmentReference::Points& points, const PyramidLevel& level,
-                 const Eigen::Matrix3f& R, const Eigen::Vector3f& t, bool quadratic_noise,
-                 std::vector<Residual>& residuals, std::vector<float>& abs_i,
-                 std::vector<float>& abs_z) {
+RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
+                                       const PyramidLevel& level, const Eigen::Matrix3f& R,
+                                       const Eigen::Vector3f& t, bool quadratic_noise,
+                                       Residuals& out, std::vector<float>& abs_i,
+                                       std::vector<float>& abs_z) {
   const LevelCamera& c = level.camera;
   const float umax = static_cast<float>(c.width - 2), vmax = static_cast<float>(c.height - 2);
+  out.reset(points.size());
+  std::size_t m = 0;
   for (std::size_t n = 0; n < points.size(); ++n) {
     const Eigen::Vector4f& q = points[n];
     const Eigen::Vector3f p = R * q.head<3>() + t;
@@ -75,62 +92,112 @@ void residualsAt(const AlignmentReference::Points& points, const PyramidLevel& l
     // d(u,v)/dp rows: (fx/z, 0, -fx x/z^2), (0, fy/z, -fy y/z^2).
     const float dux = c.fx * iz, dvy = c.fy * iz;
     const float duz = -c.fx * p.x() * iz * iz, dvz = -c.fy * p.y() * iz * iz;
-    Residual r;
-    r.ji = jacobianRow(p, s[1] * dux, s[2] * dvy, s[1] * duz + s[2] * dvz);
-    r.ri = s[0] - q[3];
+    storeJacobianRow(out.ji, m, p, s[1] * dux, s[2] * dvy, s[1] * duz + s[2] * dvz);
+    out.ri[m] = s[0] - q[3];
     if (depth_ok) {
-      r.jz = jacobianRow(p, s[4] * dux, s[5] * dvy, s[4] * duz + s[5] * dvz - 1.0f);
-      r.rz = s[3] - p.z();
-      if (quadratic_noise) {
-        // In units of the pixel's own noise: a structured-light sensor's grows with z^2, so a
-        // far pixel's metre of residual says less than a near one's.
-        const float n = 1.0f / (p.z() * p.z());
-        r.jz *= n;
-        r.rz *= n;
-      }
-      if ((n & 3) == 0) abs_z.push_back(std::abs(r.rz));
+      // In units of the pixel's own noise with `quadratic_noise`: a structured-light sensor's
+      // grows with z^2, so a far pixel's metre of residual says less than a near one's.
+      const float scale = quadratic_noise ? 1.0f / (p.z() * p.z()) : 1.0f;
+      storeJacobianRow(out.jz, m, p, scale * s[4] * dux, scale * s[5] * dvy,
+                       scale * (s[4] * duz + s[5] * dvz - 1.0f));
+      out.rz[m] = scale * (s[3] - p.z());
+      out.has_z[m] = 1.0f;
+      if ((n & 3) == 0) abs_z.push_back(std::abs(out.rz[m]));
     } else {
-      r.rz = std::numeric_limits<float>::quiet_NaN();
+      for (auto& column : out.jz) column[m] = 0.0f;
+      out.rz[m] = 0.0f;
+      out.has_z[m] = 0.0f;
     }
-    if ((n & 3) == 0) abs_i.push_back(std::abs(r.ri));
-    residuals.push_back(r);
+    if ((n & 3) == 0) abs_i.push_back(std::abs(out.ri[m]));
+    ++m;
   }
+  out.size = m;
+  out.padToLanes();
+}
+
+// Adds the weighted products of the columns a[first..5] and r (a[6]), 8 rows at a time, to
+// rows first..last of H's upper triangle (sum of w a_i a_j) and of b (sum of w a_i r): few
+// enough sums a pass for them and the columns to stay in registers.
+template <int kFirst, int kLast>
+[[gnu::always_inline]] inline void addProducts(const float* w, const float* const (&a)[7],
+                                               std::size_t rows, Matrix6d& H, Vector6d& b) {
+  Lanes sums[kLast - kFirst + 1][7] = {};
+  for (std::size_t m = 0; m < rows; m += kLanes) {
+    Lanes weight, col[7];
+    load(weight, w + m);
+    for (int c = kFirst; c < 7; ++c) load(col[c], a[c] + m);
+    for (int i = kFirst; i <= kLast; ++i) {
+      const Lanes wa = weight * col[i];
+      for (int j = i; j < 7; ++j) sums[i - kFirst][j] += wa * col[j];
+    }
+  }
+  for (int i = kFirst; i <= kLast; ++i) {
+    for (int j = i; j < 6; ++j) H(i, j) += laneSum(sums[i - kFirst][j]);
+    b(i) += laneSum(sums[i - kFirst][6]);
+  }
+}
+
+// Huber weights divided by the squared scale: k / max(|r| / sigma, k) / sigma^2, 1 / sigma^2
+// within k sigma (written without a branch, so that the loop is vectorised). `valid` (1 or 0),
+// when given, keeps only the rows that have a residual.
+RGBDMAP_VECTOR_CLONES void huberWeights(const float* residuals, const float* valid, std::size_t n,
+                                        float inv_sigma, float k, float scale, float* out) {
+  const float c = scale * k * inv_sigma * inv_sigma;
+  for (std::size_t m = 0; m < n; ++m)
+    out[m] = (valid ? valid[m] : 1.0f) * c / std::max(std::abs(residuals[m] * inv_sigma), k);
 }
 
 // The Gauss-Newton normal equations H dx = -b of the residuals, Huber-weighted with the robust
 // scales 1/inv_i and 1/inv_z (depth residuals weighed `depth_weight` against intensity ones).
-void normalEquations(const std::vector<Residual>& residuals, float inv_i, float inv_z, float k,
-                     float depth_weight, Matrix6d& H, Vector6d& b) {
-  Eigen::Matrix<float, 6, 6> Hf = Eigen::Matrix<float, 6, 6>::Zero();
-  Vector6f bf = Vector6f::Zero();
+// Only H's upper triangle is summed, 8 rows at a time, in float over chunks of 512 residuals
+// and in double across them (float sums of tens of thousands of terms lose digits).
+RGBDMAP_VECTOR_CLONES void normalEquations(const Residuals& r, float inv_i, float inv_z, float k,
+                                           float depth_weight, Matrix6d& H, Vector6d& b) {
+  constexpr std::size_t kChunk = 512;
   H.setZero();
   b.setZero();
-  std::size_t batch = 0;
-  for (const Residual& r : residuals) {
-    const float ni = r.ri * inv_i;
-    const float wi = huberWeight(ni, k) * inv_i * inv_i;
-    Hf.noalias() += (wi * r.ji) * r.ji.transpose();
-    bf.noalias() += (wi * r.ri) * r.ji;
-    if (r.rz == r.rz) {
-      const float nz = r.rz * inv_z;
-      const float wz = depth_weight * huberWeight(nz, k) * inv_z * inv_z;
-      Hf.noalias() += (wz * r.jz) * r.jz.transpose();
-      bf.noalias() += (wz * r.rz) * r.jz;
-    }
-    // Flush to double now and then: float sums of tens of thousands of terms lose digits.
-    if (++batch == 512) {
-      H += Hf.cast<double>();
-      b += bf.cast<double>();
-      Hf.setZero();
-      bf.setZero();
-      batch = 0;
+  alignas(32) float wi[kChunk], wz[kChunk];
+  for (std::size_t begin = 0; begin < r.size; begin += kChunk) {
+    // The columns are padded with zeros to whole lanes.
+    const std::size_t n = (std::min(r.size - begin, kChunk) + kLanes - 1) / kLanes * kLanes;
+    huberWeights(r.ri.data() + begin, nullptr, n, inv_i, k, 1.0f, wi);
+    huberWeights(r.rz.data() + begin, r.has_z.data() + begin, n, inv_z, k, depth_weight, wz);
+    for (const auto* half : {&r.ji, &r.jz}) {
+      const bool depth = half == &r.jz;
+      const std::vector<float>& res = depth ? r.rz : r.ri;
+      const float* const a[7] = {(*half)[0].data() + begin, (*half)[1].data() + begin,
+                                 (*half)[2].data() + begin, (*half)[3].data() + begin,
+                                 (*half)[4].data() + begin, (*half)[5].data() + begin,
+                                 res.data() + begin};
+      const float* w = depth ? wz : wi;
+      addProducts<0, 0>(w, a, n, H, b);
+      addProducts<1, 1>(w, a, n, H, b);
+      addProducts<2, 3>(w, a, n, H, b);
+      addProducts<4, 5>(w, a, n, H, b);
     }
   }
-  H += Hf.cast<double>();
-  b += bf.cast<double>();
+  H.triangularView<Eigen::StrictlyLower>() = H.transpose();
 }
 
 }  // namespace
+
+void DenseAligner::Residuals::reset(std::size_t capacity) {
+  const std::size_t padded = (capacity + kLanes - 1) / kLanes * kLanes;
+  for (auto* columns : {&ji, &jz})
+    for (auto& column : *columns)
+      if (column.size() < padded) column.resize(padded);
+  for (auto* column : {&ri, &rz, &has_z})
+    if (column->size() < padded) column->resize(padded);
+  size = 0;
+}
+
+void DenseAligner::Residuals::padToLanes() {
+  const std::size_t padded = (size + kLanes - 1) / kLanes * kLanes;
+  for (auto* columns : {&ji, &jz})
+    for (auto& column : *columns) std::fill(column.begin() + size, column.begin() + padded, 0.0f);
+  for (auto* column : {&ri, &rz, &has_z})
+    std::fill(column->begin() + size, column->begin() + padded, 0.0f);
+}
 
 void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coarsest,
                                float min_gradient) {
@@ -173,7 +240,7 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   const float k = static_cast<float>(options_.huber_k);
   const float depth_weight = static_cast<float>(options_.depth_weight);
   const bool quadratic_noise = options_.depth_noise == "quadratic";
-  std::vector<Residual>& residuals = residuals_;
+  Residuals& residuals = residuals_;
   std::vector<float>& abs_i = abs_i_;
   std::vector<float>& abs_z = abs_z_;
   float sigma_i = 10.0f, sigma_z = 0.02f;
@@ -182,17 +249,15 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
     const auto& points = reference.levels[static_cast<std::size_t>(l)].points;
     const PyramidLevel& level = current.level(l);
     const int iterations = l == finest ? options_.finest_iterations : options_.max_iterations;
-    residuals.reserve(points.size());
     std::size_t landed = 0;
     Matrix6d H = Matrix6d::Zero();
     for (int it = 0; it < iterations; ++it) {
       const Eigen::Matrix3f R = motion.linear().cast<float>();
       const Eigen::Vector3f t = motion.translation().cast<float>();
-      residuals.clear();
       abs_i.clear();
       abs_z.clear();
       residualsAt(points, level, R, t, quadratic_noise, residuals, abs_i, abs_z);
-      landed = residuals.size();
+      landed = residuals.size;
       if (landed < 12) break;
       sigma_i = robustSigma(abs_i, sigma_i);
       sigma_z = robustSigma(abs_z, sigma_z);

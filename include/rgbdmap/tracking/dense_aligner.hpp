@@ -44,11 +44,15 @@ struct AlignmentResult {
 // from the interleaved samples the pyramid precomputes, so one lookup per point and step.
 class DenseAligner {
  public:
-  // One warped keyframe point: residuals and their Jacobians with respect to a left increment
-  // (translation, rotation) of the motion. A missing depth residual has rz = NaN.
-  struct Residual {
-    Eigen::Matrix<float, 6, 1> ji, jz;
-    float ri, rz;
+  // The warped keyframe points of one step, a column per quantity (so that the normal equations
+  // run over them 8 at a time): residuals and their Jacobian rows with respect to a left
+  // increment (translation, rotation) of the motion. A point without a depth residual has
+  // has_z 0 and zeros in rz and jz. Columns are padded with zeros to a multiple of 8.
+  struct Residuals {
+    std::vector<float> ji[6], jz[6], ri, rz, has_z;
+    std::size_t size = 0;
+    void reset(std::size_t capacity);  // size 0, room for `capacity` points
+    void padToLanes();                 // zeros up to the next multiple of 8 (size unchanged)
   };
 
   explicit DenseAligner(const TrackingOptions& options) : options_(options) {}
@@ -59,7 +63,7 @@ class DenseAligner {
   TrackingOptions options_;
   // Kept from call to call: megabytes that, allocated afresh for every alignment, the kernel
   // zeroed page by page (half of a replay's page faults).
-  std::vector<Residual> residuals_;
+  Residuals residuals_;
   std::vector<float> abs_i_, abs_z_;
 };
 
