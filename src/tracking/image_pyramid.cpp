@@ -1,6 +1,7 @@
 #include "rgbdmap/tracking/image_pyramid.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 
 namespace rgbdmap {
@@ -27,6 +28,20 @@ void halveDepth(const cv::Mat& in, cv::Mat& out) {
         }
       o[x] = (n > 0 && hi - lo < 0.05f * lo) ? sum / static_cast<float>(n) : 0.0f;
     }
+  }
+}
+
+// Mean of each 2x2 block of an 8-bit grey image, as floats: what cv::resize's INTER_AREA gives
+// for the image converted to floats (the sums of whole grey levels are exact either way), without
+// converting the full-resolution image first.
+void halveGray(const cv::Mat& in, cv::Mat& out) {
+  out.create(in.rows / 2, in.cols / 2, CV_32FC1);
+  for (int y = 0; y < out.rows; ++y) {
+    const std::uint8_t* a = in.ptr<std::uint8_t>(2 * y);
+    const std::uint8_t* b = in.ptr<std::uint8_t>(2 * y + 1);
+    float* o = out.ptr<float>(y);
+    for (int x = 0; x < out.cols; ++x)
+      o[x] = static_cast<float>(a[2 * x] + a[2 * x + 1] + b[2 * x] + b[2 * x + 1]) * 0.25f;
   }
 }
 
@@ -99,19 +114,20 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
     lens_->resampleImage(gray8_, raw_);
     raw_.convertTo(base.gray, CV_32F);
     lens_->resampleDepth(frame.depth, base.depth);
+  } else if (first > 0 && full.width % 2 == 0 && full.height % 2 == 0) {
+    // Level 1 straight from the full-resolution images: the finer level is never aligned, and
+    // converting and copying it took a tenth of a frame's tracking.
+    PyramidLevel& level1 = levels_[1];
+    level1.camera = full.halved();
+    halveGray(gray8_, level1.gray);
+    halveDepth(frame.depth, level1.depth);
+    halveFrom(2, first);
   } else {
     PyramidLevel& level0 = levels_[0];
     level0.camera = full;
     gray8_.convertTo(level0.gray, CV_32F);
     frame.depth.copyTo(level0.depth);
-    for (int i = 1; i <= first; ++i) {
-      PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
-      PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
-      coarse.camera = fine.camera.halved();
-      cv::resize(fine.gray, coarse.gray, cv::Size(fine.gray.cols / 2, fine.gray.rows / 2), 0, 0,
-                 cv::INTER_AREA);
-      halveDepth(fine.depth, coarse.depth);
-    }
+    halveFrom(1, first);
   }
   int valid = 0;
   for (int y = 0; y < base.depth.rows; ++y) {
@@ -138,9 +154,8 @@ void ImagePyramid::buildFromLevel(const cv::Mat& gray, const cv::Mat& depth,
   buildCoarser(first);
 }
 
-void ImagePyramid::buildCoarser(int first) {
-  const int levels = static_cast<int>(levels_.size());
-  for (int i = first + 1; i < levels; ++i) {
+void ImagePyramid::halveFrom(int from, int to) {
+  for (int i = from; i <= to; ++i) {
     PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
     PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
     coarse.camera = fine.camera.halved();
@@ -148,7 +163,11 @@ void ImagePyramid::buildCoarser(int first) {
                cv::INTER_AREA);
     halveDepth(fine.depth, coarse.depth);
   }
-  for (int i = first; i < levels; ++i) computeSamples(levels_[static_cast<std::size_t>(i)]);
+}
+
+void ImagePyramid::buildCoarser(int first) {
+  halveFrom(first + 1, static_cast<int>(levels_.size()) - 1);
+  for (int i = first; i < levels(); ++i) computeSamples(levels_[static_cast<std::size_t>(i)]);
 }
 
 }  // namespace rgbdmap

@@ -38,7 +38,8 @@ class ImagePyramid {
   // Fills levels first..levels-1 from a BGR colour and a depth image in metres; depth outside
   // [min_depth, max_depth] counts as missing. With `undistort` and a camera with lens
   // distortion, level `first` is resampled straight from the raw images to an ideal pinhole
-  // camera (so the 3-D points and the projection agree everywhere in the image).
+  // camera (so the 3-D points and the projection agree everywhere in the image). Levels finer
+  // than `first` are not to be read (they may be empty or hold what an earlier frame left).
   void build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
              bool undistort, float min_depth, float max_depth);
   // Fills levels first..levels-1 from grey (CV_32FC1) and depth (CV_32FC1, metres, 0 = missing)
@@ -52,6 +53,8 @@ class ImagePyramid {
   double depthFraction() const { return depth_fraction_; }
 
  private:
+  // Levels from..to, each halved from the one before it.
+  void halveFrom(int from, int to);
   // Levels first+1..levels-1 halved from level `first`, and every level's samples from `first`.
   void buildCoarser(int first);
 
