@@ -176,7 +176,8 @@ RGBDMAP_VECTOR_CLONES void normalEquations(const Residuals& r, float inv_i, floa
       addProducts<4, 5>(w, a, n, H, b);
     }
   }
-  H.triangularView<Eigen::StrictlyLower>() = H.transpose();
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < i; ++j) H(i, j) = H(j, i);
 }
 
 }  // namespace
