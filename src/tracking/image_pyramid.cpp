@@ -116,7 +116,7 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
     lens_->resampleDepth(frame.depth, base.depth);
   } else if (first > 0 && full.width % 2 == 0 && full.height % 2 == 0) {
     // Level 1 straight from the full-resolution images: the finer level is never aligned, and
-    // converting and copying it took a tenth of a frame's tracking.
+    // converting and copying it took a twentieth of a frame's tracking.
     PyramidLevel& level1 = levels_[1];
     level1.camera = full.halved();
     halveGray(gray8_, level1.gray);
