@@ -22,6 +22,8 @@ using Residuals = DenseAligner::Residuals;
 constexpr std::size_t kLanes = 8;
 using Lanes = float __attribute__((vector_size(4 * kLanes)));
 
+std::size_t roundUpToLanes(std::size_t n) { return (n + kLanes - 1) / kLanes * kLanes; }
+
 // (Vectors pass by reference: by value, the baseline and the AVX clone would disagree on how.)
 [[gnu::always_inline]] inline void load(Lanes& v, const float* p) { std::memcpy(&v, p, sizeof(v)); }
 
@@ -137,6 +139,22 @@ template <int kFirst, int kLast>
   }
 }
 
+// Adds rows begin..begin+n of the Jacobian columns j and the residuals res, weighted by w[0..n),
+// to H and b. (Inlined, not a lambda: a lambda would be compiled for the baseline only, outside
+// the caller's x86-64-v3 clone.)
+[[gnu::always_inline]] inline void addRows(const std::vector<float> (&j)[6],
+                                           const std::vector<float>& res, const float* w,
+                                           std::size_t begin, std::size_t n, Matrix6d& H,
+                                           Vector6d& b) {
+  const float* const a[7] = {j[0].data() + begin, j[1].data() + begin, j[2].data() + begin,
+                             j[3].data() + begin, j[4].data() + begin, j[5].data() + begin,
+                             res.data() + begin};
+  addProducts<0, 0>(w, a, n, H, b);
+  addProducts<1, 1>(w, a, n, H, b);
+  addProducts<2, 3>(w, a, n, H, b);
+  addProducts<4, 5>(w, a, n, H, b);
+}
+
 // Huber weights divided by the squared scale: k / max(|r| / sigma, k) / sigma^2, 1 / sigma^2
 // within k sigma (written without a branch, so that the loop is vectorised). `valid` (1 or 0),
 // when given, keeps only the rows that have a residual.
@@ -159,22 +177,11 @@ RGBDMAP_VECTOR_CLONES void normalEquations(const Residuals& r, float inv_i, floa
   alignas(32) float wi[kChunk], wz[kChunk];
   for (std::size_t begin = 0; begin < r.size; begin += kChunk) {
     // The columns are padded with zeros to whole lanes.
-    const std::size_t n = (std::min(r.size - begin, kChunk) + kLanes - 1) / kLanes * kLanes;
+    const std::size_t n = roundUpToLanes(std::min(r.size - begin, kChunk));
     huberWeights(r.ri.data() + begin, nullptr, n, inv_i, k, 1.0f, wi);
     huberWeights(r.rz.data() + begin, r.has_z.data() + begin, n, inv_z, k, depth_weight, wz);
-    for (const auto* half : {&r.ji, &r.jz}) {
-      const bool depth = half == &r.jz;
-      const std::vector<float>& res = depth ? r.rz : r.ri;
-      const float* const a[7] = {(*half)[0].data() + begin, (*half)[1].data() + begin,
-                                 (*half)[2].data() + begin, (*half)[3].data() + begin,
-                                 (*half)[4].data() + begin, (*half)[5].data() + begin,
-                                 res.data() + begin};
-      const float* w = depth ? wz : wi;
-      addProducts<0, 0>(w, a, n, H, b);
-      addProducts<1, 1>(w, a, n, H, b);
-      addProducts<2, 3>(w, a, n, H, b);
-      addProducts<4, 5>(w, a, n, H, b);
-    }
+    addRows(r.ji, r.ri, wi, begin, n, H, b);  // the intensity rows
+    addRows(r.jz, r.rz, wz, begin, n, H, b);  // the depth rows
   }
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < i; ++j) H(i, j) = H(j, i);
@@ -182,22 +189,21 @@ RGBDMAP_VECTOR_CLONES void normalEquations(const Residuals& r, float inv_i, floa
 
 }  // namespace
 
+std::array<std::vector<float>*, 15> DenseAligner::Residuals::columns() {
+  return {&ji[0], &ji[1], &ji[2], &ji[3], &ji[4], &ji[5], &jz[0], &jz[1],
+          &jz[2], &jz[3], &jz[4], &jz[5], &ri,    &rz,    &has_z};
+}
+
 void DenseAligner::Residuals::reset(std::size_t capacity) {
-  const std::size_t padded = (capacity + kLanes - 1) / kLanes * kLanes;
-  for (auto* columns : {&ji, &jz})
-    for (auto& column : *columns)
-      if (column.size() < padded) column.resize(padded);
-  for (auto* column : {&ri, &rz, &has_z})
+  const std::size_t padded = roundUpToLanes(capacity);
+  for (std::vector<float>* column : columns())
     if (column->size() < padded) column->resize(padded);
   size = 0;
 }
 
 void DenseAligner::Residuals::padToLanes() {
-  const std::size_t padded = (size + kLanes - 1) / kLanes * kLanes;
-  for (auto* columns : {&ji, &jz})
-    for (auto& column : *columns) std::fill(column.begin() + size, column.begin() + padded, 0.0f);
-  for (auto* column : {&ri, &rz, &has_z})
-    std::fill(column->begin() + size, column->begin() + padded, 0.0f);
+  for (std::vector<float>* column : columns())
+    std::fill(column->begin() + size, column->begin() + roundUpToLanes(size), 0.0f);
 }
 
 void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coarsest,

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <array>
 #include <vector>
 
 #include "rgbdmap/tracking/image_pyramid.hpp"
@@ -53,6 +54,7 @@ class DenseAligner {
     std::size_t size = 0;
     void reset(std::size_t capacity);  // size 0, room for `capacity` points
     void padToLanes();                 // zeros up to the next multiple of 8 (size unchanged)
+    std::array<std::vector<float>*, 15> columns();  // every one of them
   };
 
   explicit DenseAligner(const TrackingOptions& options) : options_(options) {}
