@@ -580,11 +580,17 @@ TEST_F(OpenNI2TumDriver, UnreadableImagesAreSkippedAndTheRestDelivered) {
   openni::Device device;
   ASSERT_EQ(device.open(("tum:" + copy).c_str()), openni::STATUS_OK)
       << openni::OpenNI::getExtendedError();
+  // Frame by frame: at the recorded pace a reader stalled by a ThreadSanitizer build on a busy
+  // machine lost a readable pair to the next one (CI, 2026-12-05: 29 of 30), which is what a
+  // camera does and not what this test is about.
+  openni::PlaybackControl* playback = device.getPlaybackControl();
+  ASSERT_NE(playback, nullptr);
+  ASSERT_EQ(playback->setSpeed(-1.0f), openni::STATUS_OK);
   openni::VideoStream depth;
   ASSERT_EQ(depth.create(device, openni::SENSOR_DEPTH), openni::STATUS_OK);
   ASSERT_EQ(depth.start(), openni::STATUS_OK);
   // Every readable pair (a busy machine under a sanitizer may take seconds for the first), then
-  // nothing more: the two unreadable ones are skipped, not sent late.
+  // nothing more: the two unreadable ones are skipped, not sent late, and do not stall the rest.
   const std::vector<ReadFrame> frames = readFrames({&depth}, sequence.size() - 2, 30000);
   const std::vector<ReadFrame> more = readFrames({&depth}, 1, 1000);
   depth.stop();
