@@ -1,13 +1,7 @@
 #include "rgbdmap/runtime/frame_queue.hpp"
 
-#include <thread>
-
 namespace rgbdmap {
 namespace {
-
-// The queues are lock-free and have no wait primitive; a short sleep keeps an idle side from
-// burning a core while adding at most this much latency (frames are ~33 ms apart).
-void backoff() { std::this_thread::sleep_for(std::chrono::microseconds(200)); }
 
 // Frames in the pool beyond the queue's capacity: one being filled, one being mapped, and for a
 // live camera room for the frames that arrive while the mapper works on one (a slow keyframe
@@ -39,12 +33,11 @@ FrameQueue::FrameQueue(std::size_t capacity, QueuePolicy policy, int width, int 
 
 Frame* FrameQueue::acquire() {
   Frame* frame = nullptr;
-  while (!free_.pop(frame)) {
-    if (closed_.load()) return nullptr;
-    if (policy_ == QueuePolicy::kDropOldest) return overflow_;
-    backoff();
-  }
-  return frame;
+  if (free_.pop(frame)) return frame;
+  if (policy_ == QueuePolicy::kDropOldest) return closed_.load() ? nullptr : overflow_;
+  std::unique_lock<std::mutex> lock(wait_mutex_);
+  changed_.wait(lock, [&] { return free_.pop(frame) || closed_.load(); });
+  return frame;  // nullptr: closed
 }
 
 Frame* FrameQueue::tryAcquire() {
@@ -61,15 +54,17 @@ void FrameQueue::push(Frame* frame) {
   // producer waited in acquire() instead.
   queued_.fetch_add(1);
   filled_.push(frame);
+  wake();
 }
 
-void FrameQueue::close() { closed_.store(true); }
+void FrameQueue::close() {
+  closed_.store(true);
+  wake();
+}
 
 Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
-  finished = false;
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
   Frame* frame = nullptr;
-  for (;;) {
+  const auto take = [&] {
     if (policy_ == QueuePolicy::kDropOldest) {
       // Keep only the newest `capacity_` frames: the older ones are stale for a live camera.
       while (filled_.read_available() > capacity_ && filled_.pop(frame)) {
@@ -77,22 +72,35 @@ Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
         dropped_.fetch_add(1);
         free_.bounded_push(frame);
       }
+      frame = nullptr;
     }
     // Read `closed_` before popping: a frame pushed before close() is then always seen.
     const bool closed = closed_.load();
-    if (filled_.pop(frame)) break;
-    if (closed) {
-      finished = true;
+    return filled_.pop(frame) || closed;
+  };
+  finished = false;
+  if (!take()) {
+    std::unique_lock<std::mutex> lock(wait_mutex_);
+    if (!changed_.wait_until(lock, std::chrono::steady_clock::now() + timeout, take))
       return nullptr;
-    }
-    if (std::chrono::steady_clock::now() >= deadline) return nullptr;
-    backoff();
   }
+  finished = frame == nullptr;  // closed and drained
+  if (finished) return nullptr;
   queued_.fetch_sub(1);
   return frame;
 }
 
-void FrameQueue::release(Frame* frame) { free_.bounded_push(frame); }
+void FrameQueue::release(Frame* frame) {
+  free_.bounded_push(frame);
+  wake();
+}
+
+void FrameQueue::wake() {
+  // Taking the lock orders this change after a waiter's look at the queues: it either saw the
+  // change or is already waiting when notified.
+  { std::lock_guard<std::mutex> lock(wait_mutex_); }
+  changed_.notify_all();
+}
 
 void FrameQueue::freeImages() {
   for (const std::unique_ptr<Frame>& frame : storage_) {
