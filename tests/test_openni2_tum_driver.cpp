@@ -581,7 +581,7 @@ TEST_F(OpenNI2TumDriver, UnreadableImagesAreSkippedAndTheRestDelivered) {
   ASSERT_EQ(device.open(("tum:" + copy).c_str()), openni::STATUS_OK)
       << openni::OpenNI::getExtendedError();
   // Frame by frame: at the recorded pace a reader stalled by a ThreadSanitizer build on a busy
-  // machine lost a readable pair to the next one (CI, 2026-12-05: 29 of 30), which is what a
+  // machine lost a readable pair to the next one (once in CI: 29 of 30), which is what a
   // camera does and not what this test is about.
   openni::PlaybackControl* playback = device.getPlaybackControl();
   ASSERT_NE(playback, nullptr);

@@ -67,12 +67,12 @@ Frame* FrameQueue::pop(std::chrono::milliseconds timeout, bool& finished) {
   const auto take = [&] {
     if (policy_ == QueuePolicy::kDropOldest) {
       // Keep only the newest `capacity_` frames: the older ones are stale for a live camera.
-      while (filled_.read_available() > capacity_ && filled_.pop(frame)) {
+      Frame* stale = nullptr;
+      while (filled_.read_available() > capacity_ && filled_.pop(stale)) {
         queued_.fetch_sub(1);
         dropped_.fetch_add(1);
-        free_.bounded_push(frame);
+        free_.bounded_push(stale);
       }
-      frame = nullptr;
     }
     // Read `closed_` before popping: a frame pushed before close() is then always seen.
     const bool closed = closed_.load();
