@@ -12,19 +12,24 @@ constexpr std::size_t kPixelsPerTask = 640 * 60;  // depth resampled per task: r
 }  // namespace
 
 LensUndistortion::LensUndistortion(const CameraIntrinsics& lens, const cv::Matx33d& pinhole,
-                                   cv::Size size)
-    : raw_size_(lens.width, lens.height), size_(size) {
+                                   cv::Size size, int raw_level)
+    : raw_size_(lens.width >> raw_level, lens.height >> raw_level), size_(size) {
   cv::initUndistortRectifyMap(lens.cameraMatrix(), lens.distortion(), cv::noArray(), pinhole, size,
                               CV_32FC1, map_x_, map_y_);
-  // Rounded as cv::remap rounds for its nearest-neighbour lookup, against the raw image (the
-  // camera's size).
+  if (raw_level > 0) {
+    // Pixel centres on the halved raw grid: x' = (x + 0.5) / 2^k - 0.5.
+    const double s = 1.0 / static_cast<double>(1 << raw_level);
+    map_x_.convertTo(map_x_, CV_32FC1, s, 0.5 * s - 0.5);
+    map_y_.convertTo(map_y_, CV_32FC1, s, 0.5 * s - 0.5);
+  }
+  // Rounded as cv::remap rounds for its nearest-neighbour lookup, against the raw image.
   nearest_raw_pixel_.resize(static_cast<std::size_t>(size.area()));
   for (int v = 0; v < size.height; ++v) {
     for (int u = 0; u < size.width; ++u) {
       const int su = cvRound(map_x_.at<float>(v, u)), sv = cvRound(map_y_.at<float>(v, u));
-      const bool inside = su >= 0 && sv >= 0 && su < lens.width && sv < lens.height;
+      const bool inside = su >= 0 && sv >= 0 && su < raw_size_.width && sv < raw_size_.height;
       nearest_raw_pixel_[static_cast<std::size_t>(v) * size.width + u] =
-          inside ? sv * lens.width + su : -1;
+          inside ? sv * raw_size_.width + su : -1;
     }
   }
 }

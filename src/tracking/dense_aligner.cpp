@@ -117,6 +117,31 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
   out.padToLanes();
 }
 
+// The frame's brightness change against the reference (auto-exposure), as one offset in grey
+// levels: the Huber-weighted mean of the intensity residuals (weighed by their distance from the
+// last estimate `offset`), shrunk towards zero by `tolerance`: an offset of a few grey levels is
+// as likely a misalignment or the scene's own content as an exposure change. Subtracts it from
+// every residual and refills `abs_i` (every 4th, as residualsAt does) with what remains.
+// Returns the new estimate.
+float subtractOffset(Residuals& r, float offset, float sigma_i, float k, float tolerance,
+                     std::vector<float>& abs_i) {
+  const float inv = 1.0f / sigma_i;
+  double sw = 0, swr = 0;
+  for (std::size_t m = 0; m < r.size; ++m) {
+    const float w = 1.0f / std::max(std::abs((r.ri[m] - offset) * inv), k);
+    sw += w;
+    swr += w * r.ri[m];
+  }
+  const float mean = static_cast<float>(swr / sw);
+  offset = std::copysign(std::max(0.0f, std::abs(mean) - tolerance), mean);
+  abs_i.clear();
+  for (std::size_t m = 0; m < r.size; ++m) {
+    r.ri[m] -= offset;
+    if ((m & 3) == 0) abs_i.push_back(std::abs(r.ri[m]));
+  }
+  return offset;
+}
+
 // Adds the weighted products of the columns a[first..5] and r (a[6]), 8 rows at a time, to
 // rows first..last of H's upper triangle (sum of w a_i a_j) and of b (sum of w a_i r): few
 // enough sums a pass for them and the columns to stay in registers.
@@ -251,6 +276,9 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   std::vector<float>& abs_i = abs_i_;
   std::vector<float>& abs_z = abs_z_;
   float sigma_i = 10.0f, sigma_z = 0.02f;
+  const bool brightness_offset = options_.brightness == "offset";
+  const float brightness_tolerance = static_cast<float>(options_.brightness_tolerance);
+  float offset = 0.0f;
 
   for (int l = coarsest; l >= finest; --l) {
     const auto& points = reference.levels[static_cast<std::size_t>(l)].points;
@@ -266,6 +294,10 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       residualsAt(points, level, R, t, quadratic_noise, residuals, abs_i, abs_z);
       landed = residuals.size;
       if (landed < 12) break;
+      // On the finest level only: while coarse levels bring the frame into place, a misalignment
+      // shifts the mean residual as much as an exposure change does.
+      if (brightness_offset && l == finest)
+        offset = subtractOffset(residuals, offset, sigma_i, k, brightness_tolerance, abs_i);
       sigma_i = robustSigma(abs_i, sigma_i);
       sigma_z = robustSigma(abs_z, sigma_z);
       Vector6d b;

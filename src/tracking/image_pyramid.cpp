@@ -105,15 +105,34 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
   cv::cvtColor(frame.color, gray8_, cv::COLOR_BGR2GRAY);
   PyramidLevel& base = levels_[static_cast<std::size_t>(first)];
   base.camera = at_first;
+  const bool halvable = full.width % (1 << first) == 0 && full.height % (1 << first) == 0;
   if (undistort && camera.hasDistortion()) {
+    // Resampled from raw images averaged down to the level's resolution: one bilinear sample of
+    // the full-resolution image per pixel aliases (fine texture turns into noise that moves with
+    // the camera), and one raw depth sample keeps all its noise.
+    const int raw_level = halvable ? first : 0;
     const cv::Size size(at_first.width, at_first.height);
     if (!lens_ || lens_->size() != size) {
       const cv::Matx33d K(at_first.fx, 0, at_first.cx, 0, at_first.fy, at_first.cy, 0, 0, 1);
-      lens_.emplace(camera, K, size);
+      lens_.emplace(camera, K, size, raw_level);
     }
-    lens_->resampleImage(gray8_, raw_);
-    raw_.convertTo(base.gray, CV_32F);
-    lens_->resampleDepth(frame.depth, base.depth);
+    if (raw_level > 0) {
+      halveGray(gray8_, raw_gray_[0]);
+      halveDepth(frame.depth, raw_depth_[0]);
+      for (int i = 1; i < raw_level; ++i) {
+        cv::resize(raw_gray_[0], raw_gray_[1],
+                   cv::Size(raw_gray_[0].cols / 2, raw_gray_[0].rows / 2), 0, 0, cv::INTER_AREA);
+        halveDepth(raw_depth_[0], raw_depth_[1]);
+        std::swap(raw_gray_[0], raw_gray_[1]);
+        std::swap(raw_depth_[0], raw_depth_[1]);
+      }
+      lens_->resampleImage(raw_gray_[0], base.gray);
+      lens_->resampleDepth(raw_depth_[0], base.depth);
+    } else {
+      lens_->resampleImage(gray8_, raw_);
+      raw_.convertTo(base.gray, CV_32F);
+      lens_->resampleDepth(frame.depth, base.depth);
+    }
   } else if (first > 0 && full.width % 2 == 0 && full.height % 2 == 0) {
     // Level 1 straight from the full-resolution images: the finer level is never aligned, and
     // converting and copying it took a twentieth of a frame's tracking.

@@ -19,6 +19,13 @@ Keys trackingKeys(TrackingOptions& o) {
       choice("tracking.depth_noise", &o.depth_noise, {"quadratic", "constant"},
              "dense: a depth residual's noise grows with depth squared (quadratic: structured "
              "light, stereo) or is the same everywhere (constant)"),
+      choice(
+          "tracking.brightness", &o.brightness, {"offset", "none"},
+          "dense: offset: estimate how much brighter a frame is than its reference "
+          "(auto-exposure) and take it out of the intensity residuals; none: compare as they are"),
+      number("tracking.brightness_tolerance", &o.brightness_tolerance, 0, 255,
+             "dense: a brightness offset is taken out less this much (grey levels): smaller "
+             "ones are as likely a misalignment"),
       number("tracking.huber_k", &o.huber_k, 0.1, 100,
              "dense: Huber threshold in robust standard deviations"),
       number("tracking.min_gradient", &o.min_gradient, 0, 255,

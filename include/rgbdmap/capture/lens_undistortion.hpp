@@ -15,9 +15,12 @@ namespace rgbdmap {
 class LensUndistortion {
  public:
   // A pinhole view of size `size` with camera matrix `pinhole` of the camera `lens`: the
-  // camera's own matrix and size at full resolution, or a pyramid level's, resampled straight
-  // from the raw images.
-  LensUndistortion(const CameraIntrinsics& lens, const cv::Matx33d& pinhole, cv::Size size);
+  // camera's own matrix and size at full resolution, or a pyramid level's. The view is read from
+  // the raw images halved `raw_level` times (2x2 means): a pyramid level resampled from raw
+  // images of its own resolution, each of its pixels the mean of the raw pixels it covers,
+  // instead of one bilinear sample of the full-resolution image (which aliases).
+  LensUndistortion(const CameraIntrinsics& lens, const cv::Matx33d& pinhole, cv::Size size,
+                   int raw_level = 0);
   // Full resolution, with the camera's own matrix.
   explicit LensUndistortion(const CameraIntrinsics& lens);
 

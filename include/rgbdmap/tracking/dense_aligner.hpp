@@ -41,8 +41,10 @@ struct AlignmentResult {
 // Coarse-to-fine dense alignment of a frame to a keyframe (DVO, Kerl et al. 2013): minimises
 // intensity and depth differences of the keyframe's pixels warped into the frame, with Huber
 // weights on residuals normalised by their robust spread, by Gauss-Newton on SE(3) (left
-// increments). Forward compositional: the frame's gradients are sampled where each point lands,
-// from the interleaved samples the pyramid precomputes, so one lookup per point and step.
+// increments). On the finest level the intensity residuals lose their robust mean beyond a
+// tolerance (tracking.brightness: the camera's exposure changed, not its pose). Forward
+// compositional: the frame's gradients are sampled where each point lands, from the interleaved
+// samples the pyramid precomputes, so one lookup per point and step.
 class DenseAligner {
  public:
   // The warped keyframe points of one step, a column per quantity (so that the normal equations

@@ -37,8 +37,9 @@ class ImagePyramid {
  public:
   // Fills levels first..levels-1 from a BGR colour and a depth image in metres; depth outside
   // [min_depth, max_depth] counts as missing. With `undistort` and a camera with lens
-  // distortion, level `first` is resampled straight from the raw images to an ideal pinhole
-  // camera (so the 3-D points and the projection agree everywhere in the image). Levels finer
+  // distortion, level `first` is resampled to an ideal pinhole camera (so the 3-D points and the
+  // projection agree everywhere in the image) from the raw images averaged down to its
+  // resolution (grey: 2x2 means; depth: means of blocks that agree). Levels finer
   // than `first` are not to be read (they may be empty or hold what an earlier frame left).
   void build(const Frame& frame, const CameraIntrinsics& camera, int levels, int first,
              bool undistort, float min_depth, float max_depth);
@@ -61,6 +62,7 @@ class ImagePyramid {
   std::vector<PyramidLevel> levels_;
   double depth_fraction_ = 0.0;
   cv::Mat gray8_, raw_;                   // reused buffers
+  cv::Mat raw_gray_[2], raw_depth_[2];    // the raw images averaged down, for undistortion
   std::optional<LensUndistortion> lens_;  // to the pinhole camera of level `first`
 };
 

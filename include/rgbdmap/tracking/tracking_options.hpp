@@ -27,9 +27,15 @@ struct TrackingOptions {
   // structured-light or stereo sensor's), or "constant" (one robust scale for every pixel).
   // Measured in docs/benchmarks.md (Tracking): quadratic at 0.1 against photometric only.
   std::string depth_noise = "quadratic";
-  double huber_k = 1.345;     // Huber threshold, in robust standard deviations
-  double min_gradient = 3.0;  // finest level: pixels with a weaker intensity gradient only
-                              // take part every second row and column (grey levels/px)
+  // "offset": each alignment also estimates how much brighter the frame is than the reference
+  // (one offset in grey levels, what auto-exposure changes) and takes it out of the intensity
+  // residuals, less brightness_tolerance (smaller offsets are as likely a misalignment);
+  // "none": intensities compared as they are. Measured in docs/benchmarks.md (Tracking).
+  std::string brightness = "offset";
+  double brightness_tolerance = 6.0;  // grey levels
+  double huber_k = 1.345;             // Huber threshold, in robust standard deviations
+  double min_gradient = 3.0;          // finest level: pixels with a weaker intensity gradient only
+                                      // take part every second row and column (grey levels/px)
 
   // A new keyframe after this much motion from the last one, or when too little of it is seen.
   double keyframe_translation = 0.08;  // m
