@@ -1,15 +1,20 @@
 #include "rgbdmap/tracking/image_pyramid.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
+
+#include "rgbdmap/base/vector_clones.hpp"
 
 namespace rgbdmap {
 namespace {
 
 // Mean of the valid depths of each 2x2 block, if they agree (a block straddling a depth edge
-// would otherwise invent a surface between the two).
-void halveDepth(const cv::Mat& in, cv::Mat& out) {
+// would otherwise invent a surface between the two). Written without branches (a missing depth
+// adds 0 to the sum, which is exact), so that the loop is vectorised: at full resolution it was
+// a twentieth of tracking's time.
+RGBDMAP_VECTOR_CLONES void halveDepth(const cv::Mat& in, cv::Mat& out) {
   out.create(in.rows / 2, in.cols / 2, CV_32FC1);
   for (int y = 0; y < out.rows; ++y) {
     const float* a = in.ptr<float>(2 * y);
@@ -17,16 +22,15 @@ void halveDepth(const cv::Mat& in, cv::Mat& out) {
     float* o = out.ptr<float>(y);
     for (int x = 0; x < out.cols; ++x) {
       const float d[4] = {a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]};
-      float sum = 0, lo = 1e9f, hi = 0;
-      int n = 0;
-      for (float v : d)
-        if (v > 0) {
-          sum += v;
-          lo = std::min(lo, v);
-          hi = std::max(hi, v);
-          ++n;
-        }
-      o[x] = (n > 0 && hi - lo < 0.05f * lo) ? sum / static_cast<float>(n) : 0.0f;
+      float sum = 0, lo = 1e9f, hi = 0, n = 0;
+      for (float v : d) {
+        const bool valid = v > 0;  // also false for NaN
+        sum += valid ? v : 0.0f;
+        n += valid ? 1.0f : 0.0f;
+        lo = std::min(lo, valid ? v : 1e9f);
+        hi = std::max(hi, valid ? v : 0.0f);
+      }
+      o[x] = (n > 0 && hi - lo < 0.05f * lo) ? sum / std::max(n, 1.0f) : 0.0f;
     }
   }
 }
