@@ -49,6 +49,13 @@ void halveGray(const cv::Mat& in, cv::Mat& out) {
   }
 }
 
+// Grey (CV_32FC1: 2x2 means, INTER_AREA) and depth (halveDepth) at half the resolution.
+void halveImages(const cv::Mat& gray, const cv::Mat& depth, cv::Mat& half_gray,
+                 cv::Mat& half_depth) {
+  cv::resize(gray, half_gray, cv::Size(gray.cols / 2, gray.rows / 2), 0, 0, cv::INTER_AREA);
+  halveDepth(depth, half_depth);
+}
+
 // Depth gradient by central differences; 0 where a neighbour is missing or across an edge.
 bool depthGradient(const float* up, const float* row, const float* down, int x, float& zx,
                    float& zy) {
@@ -109,11 +116,11 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
   cv::cvtColor(frame.color, gray8_, cv::COLOR_BGR2GRAY);
   PyramidLevel& base = levels_[static_cast<std::size_t>(first)];
   base.camera = at_first;
-  const bool halvable = full.width % (1 << first) == 0 && full.height % (1 << first) == 0;
   if (undistort && camera.hasDistortion()) {
     // Resampled from raw images averaged down to the level's resolution: one bilinear sample of
     // the full-resolution image per pixel aliases (fine texture turns into noise that moves with
     // the camera), and one raw depth sample keeps all its noise.
+    const bool halvable = full.width % (1 << first) == 0 && full.height % (1 << first) == 0;
     const int raw_level = halvable ? first : 0;
     const cv::Size size(at_first.width, at_first.height);
     if (!lens_ || lens_->size() != size) {
@@ -124,9 +131,7 @@ void ImagePyramid::build(const Frame& frame, const CameraIntrinsics& camera, int
       halveGray(gray8_, raw_gray_[0]);
       halveDepth(frame.depth, raw_depth_[0]);
       for (int i = 1; i < raw_level; ++i) {
-        cv::resize(raw_gray_[0], raw_gray_[1],
-                   cv::Size(raw_gray_[0].cols / 2, raw_gray_[0].rows / 2), 0, 0, cv::INTER_AREA);
-        halveDepth(raw_depth_[0], raw_depth_[1]);
+        halveImages(raw_gray_[0], raw_depth_[0], raw_gray_[1], raw_depth_[1]);
         std::swap(raw_gray_[0], raw_gray_[1]);
         std::swap(raw_depth_[0], raw_depth_[1]);
       }
@@ -182,9 +187,7 @@ void ImagePyramid::halveFrom(int from, int to) {
     PyramidLevel& fine = levels_[static_cast<std::size_t>(i - 1)];
     PyramidLevel& coarse = levels_[static_cast<std::size_t>(i)];
     coarse.camera = fine.camera.halved();
-    cv::resize(fine.gray, coarse.gray, cv::Size(fine.gray.cols / 2, fine.gray.rows / 2), 0, 0,
-               cv::INTER_AREA);
-    halveDepth(fine.depth, coarse.depth);
+    halveImages(fine.gray, fine.depth, coarse.gray, coarse.depth);
   }
 }
 
