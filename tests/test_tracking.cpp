@@ -4,13 +4,16 @@
 // pose and is not mapped; no mapped frame may get a bad pose; tracking comes back.
 #include <gtest/gtest.h>
 
+#include <deque>
 #include <fstream>
 #include <functional>
 #include <iostream>
 
+#include "rgbdmap/base/image_buffer_pool.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/config/config.hpp"
 #include "rgbdmap/eval/trajectory_evaluation.hpp"
+#include "rgbdmap/tracking/dense_tracker.hpp"
 #include "rgbdmap/tracking/pose_provider.hpp"
 #include "test_support.hpp"
 
@@ -117,6 +120,46 @@ TEST(Tracking, Fr1RpyHead100EveryFrame) {
   std::cout << "fr1/rpy head100 ATE " << e << " m, lost " << count(t, TrackingState::kLost) << "\n";
   EXPECT_LT(e, 0.035);  // target 3.0 cm; measured 1.7 cm (OpenCV RgbdOdometry f2f 3.5 cm)
   EXPECT_LE(count(t, TrackingState::kLost), 5);
+}
+
+// Keeps the last two keyframes it was given, as the loop thread holds a few until it has seen them.
+struct KeepingSink : KeyframeSink {
+  std::deque<TrackedKeyframe> kept;
+  std::size_t added = 0;
+  void addKeyframe(TrackedKeyframe keyframe) override {
+    kept.push_back(std::move(keyframe));
+    if (kept.size() > 2) kept.pop_front();
+    ++added;
+  }
+};
+
+// A keyframe's images (the sink's copies, relocalisation's) come from buffers the tracker took
+// when it was made: mapping fresh memory on a keyframe cost more than tracking the frame
+// (docs/benchmarks.md). Over more keyframes than relocalisation keeps, none is allocated.
+TEST(Tracking, KeyframesTakeNoNewImageMemory) {
+  const std::string folder = test::tumDir(kRpy);
+  const Config config = configFor(folder);
+  TumSequence sequence(folder);
+  KeepingSink sink;
+  DenseTracker tracker(config.camera, config.tracking, static_cast<float>(config.filter.min_depth),
+                       static_cast<float>(config.filter.max_depth), &sink);
+  const std::size_t before = imageBufferPool().allocations();
+  Frame frame;
+  std::string error;
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    ASSERT_TRUE(sequence.load(i, frame, error)) << error;
+    frame.timestamp = sequence[i].rgb_time;
+    tracker.estimate(frame);
+  }
+  std::cout << tracker.keyframes() << " keyframes\n";
+  EXPECT_GT(tracker.keyframes(),
+            static_cast<std::uint64_t>(config.tracking.relocalisation_keyframes) + 3);
+  EXPECT_EQ(sink.added, tracker.keyframes());
+  EXPECT_EQ(imageBufferPool().allocations(), before);
+  for (const TrackedKeyframe& k : sink.kept) {  // and they are the pool's
+    EXPECT_EQ(k.color.u->currAllocator, &imageBufferPool());
+    EXPECT_EQ(k.depth.u->currAllocator, &imageBufferPool());
+  }
 }
 
 // A synthetic sequence written by `rgbdmap synth` with extra options; returns its folder.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdmap/base/image_buffer_pool.hpp"
+
 namespace rgbdmap {
 namespace {
 
@@ -37,7 +39,17 @@ DenseTracker::DenseTracker(const CameraIntrinsics& camera, const TrackingOptions
       relocaliser_(camera, options.relocalisation_min_inliers, min_depth, max_depth),
       sink_(sink),
       first_id_(sink ? sink->firstKeyframeId() : 0),
-      next_id_(first_id_) {}
+      next_id_(first_id_) {
+  // The images a keyframe keeps (relocalisation's grey and depth while it is among the recent
+  // ones, the sink's colour and depth until the loop thread has seen them) come from pooled
+  // buffers, taken now: allocated on a keyframe, they cost more than tracking it.
+  const int kept = std::max(1, options.relocalisation_keyframes) + 1;
+  const int handed = sink ? 3 : 0;
+  ImageBufferPool& pool = imageBufferPool();
+  pool.reserve(camera.height, camera.width, CV_8UC1, kept);
+  pool.reserve(camera.height, camera.width, CV_32FC1, kept + handed);
+  pool.reserve(camera.height, camera.width, CV_8UC3, handed);
+}
 
 DenseTracker::~DenseTracker() = default;
 
@@ -78,8 +90,8 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
       out.from_reference = rigid(from->pose.inverse() * pose);
       out.information = alignment.information;
     }
-    out.color = frame.color.clone();
-    out.depth = frame.depth.clone();
+    out.color = pooledCopy(frame.color);
+    out.depth = pooledCopy(frame.depth);
     sink_->addKeyframe(std::move(out));
   }
   auto keyframe = std::make_shared<Keyframe>();

@@ -4,6 +4,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "rgbdmap/base/image_buffer_pool.hpp"
 #include "rgbdmap/capture/lens_undistortion.hpp"
 #include "rgbdmap/tracking/orb_matches.hpp"
 
@@ -18,8 +19,9 @@ Relocaliser::Relocaliser(const CameraIntrinsics& camera, int min_inliers, float 
       orb_(cv::ORB::create(800)) {}
 
 void Relocaliser::remember(const Frame& frame, RelocalisationView& view) const {
+  view.gray = pooledImage(frame.color.rows, frame.color.cols, CV_8UC1);
   cv::cvtColor(frame.color, view.gray, cv::COLOR_BGR2GRAY);
-  frame.depth.copyTo(view.depth);
+  view.depth = pooledCopy(frame.depth);
   view.described = false;
   view.points.clear();
   view.descriptors.release();
