@@ -73,10 +73,12 @@ float robustSigma(std::vector<float>& values, float fallback) {
 // The residuals of the reference's `points` (x, y, z, intensity) moved by (R, t) into `level`,
 // each with its Jacobian rows; every 4th point's absolute residuals go to abs_i and abs_z (for
 // the robust scales). With `quadratic_noise`, depth residuals and their rows are divided by z^2.
+// With `inv_knee2` (1 / knee^2, or 0), intensity residuals and their rows are divided by
+// sqrt(1 + |gradient|^2 / knee^2): about knee / |gradient| where the image is steeper than knee.
 RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
                                        const PyramidLevel& level, const Eigen::Matrix3f& R,
                                        const Eigen::Vector3f& t, bool quadratic_noise,
-                                       Residuals& out, std::vector<float>& abs_i,
+                                       float inv_knee2, Residuals& out, std::vector<float>& abs_i,
                                        std::vector<float>& abs_z) {
   const LevelCamera& c = level.camera;
   const float umax = static_cast<float>(c.width - 2), vmax = static_cast<float>(c.height - 2);
@@ -94,8 +96,10 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
     // d(u,v)/dp rows: (fx/z, 0, -fx x/z^2), (0, fy/z, -fy y/z^2).
     const float dux = c.fx * iz, dvy = c.fy * iz;
     const float duz = -c.fx * p.x() * iz * iz, dvz = -c.fy * p.y() * iz * iz;
-    storeJacobianRow(out.ji, m, p, s[1] * dux, s[2] * dvy, s[1] * duz + s[2] * dvz);
-    out.ri[m] = s[0] - q[3];
+    const float gi = 1.0f / std::sqrt(1.0f + inv_knee2 * (s[1] * s[1] + s[2] * s[2]));
+    const float gx = gi * s[1], gy = gi * s[2];
+    storeJacobianRow(out.ji, m, p, gx * dux, gy * dvy, gx * duz + gy * dvz);
+    out.ri[m] = gi * (s[0] - q[3]);
     if (depth_ok) {
       // In units of the pixel's own noise with `quadratic_noise`: a structured-light sensor's
       // grows with z^2, so a far pixel's metre of residual says less than a near one's.
@@ -272,6 +276,8 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   const float k = static_cast<float>(options_.huber_k);
   const float depth_weight = static_cast<float>(options_.depth_weight);
   const bool quadratic_noise = options_.depth_noise == "quadratic";
+  const float knee = static_cast<float>(options_.coarse_gradient_knee);
+  const float coarse_inv_knee2 = knee > 0 ? 1.0f / (knee * knee) : 0.0f;
   Residuals& residuals = residuals_;
   std::vector<float>& abs_i = abs_i_;
   std::vector<float>& abs_z = abs_z_;
@@ -291,7 +297,8 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       const Eigen::Vector3f t = motion.translation().cast<float>();
       abs_i.clear();
       abs_z.clear();
-      residualsAt(points, level, R, t, quadratic_noise, residuals, abs_i, abs_z);
+      residualsAt(points, level, R, t, quadratic_noise, l == finest ? 0.0f : coarse_inv_knee2,
+                  residuals, abs_i, abs_z);
       landed = residuals.size;
       if (landed < 12) break;
       // On the finest level only: while coarse levels bring the frame into place, a misalignment

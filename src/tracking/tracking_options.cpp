@@ -26,6 +26,9 @@ Keys trackingKeys(TrackingOptions& o) {
       number("tracking.brightness_tolerance", &o.brightness_tolerance, 0, 255,
              "dense: a brightness offset is taken out less this much (grey levels): smaller "
              "ones are as likely a misalignment"),
+      number("tracking.coarse_gradient_knee", &o.coarse_gradient_knee, 0, 255,
+             "dense: on the coarse levels, intensity residuals where the image is steeper than "
+             "this (grey/px) weigh less (knee/gradient); 0 = every residual alike"),
       number("tracking.huber_k", &o.huber_k, 0.1, 100,
              "dense: Huber threshold in robust standard deviations"),
       number("tracking.min_gradient", &o.min_gradient, 0, 255,

@@ -33,6 +33,13 @@ struct TrackingOptions {
   // "none": intensities compared as they are. Measured in docs/benchmarks.md (Tracking).
   std::string brightness = "offset";
   double brightness_tolerance = 6.0;  // grey levels
+  // On the coarse levels, where the frame starts pixels away from where it lands, an intensity
+  // residual's linearisation holds over a shift of about one grey level's worth of its gradient:
+  // where the image is steeper than this knee, residuals weigh less (knee / gradient), so that
+  // the step follows the broad shapes that still hold, not the edges that do not. The finest
+  // level, where the frame is within a pixel, weighs every residual alike. 0: off. Measured in
+  // docs/benchmarks.md (Tracking).
+  double coarse_gradient_knee = 7.0;  // grey levels per pixel
   double huber_k = 1.345;             // Huber threshold, in robust standard deviations
   double min_gradient = 3.0;          // finest level: pixels with a weaker intensity gradient only
                                       // take part every second row and column (grey levels/px)
