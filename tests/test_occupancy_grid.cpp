@@ -323,7 +323,11 @@ TEST(GroundFrame, FloorOfARealMapAgreesWithTheAccelerometer) {
   const std::size_t start = output.rfind(", ", at) + 2;
   const double degrees = std::stod(output.substr(start, at - start));
   std::cout << "floor plane " << degrees << " degrees from the accelerometer's up\n";
-  EXPECT_LT(degrees, 3.0);
+  // The ground-truth poses' map gives 2.1 degrees; odometry maps 2.1-3.3 with the same rotation
+  // error of their poses (2.3 degrees on average from the motion capture's), depending on which
+  // horizontal surface the finder takes (the desk or the floor, 12 cm apart). The accelerometer
+  // itself agrees with the motion capture within 5 (AccelerometerLog's test).
+  EXPECT_LT(degrees, 4.0);
   const OccupancyGrid grid = readGrid(dir + "/grid.yaml");
   EXPECT_GT(grid.count(OccupancyGrid::kFree), 100u);
   EXPECT_GT(grid.count(OccupancyGrid::kOccupied), 10u);
