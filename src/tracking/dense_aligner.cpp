@@ -96,7 +96,8 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
     // d(u,v)/dp rows: (fx/z, 0, -fx x/z^2), (0, fy/z, -fy y/z^2).
     const float dux = c.fx * iz, dvy = c.fy * iz;
     const float duz = -c.fx * p.x() * iz * iz, dvz = -c.fy * p.y() * iz * iz;
-    const float gi = 1.0f / std::sqrt(1.0f + inv_knee2 * (s[1] * s[1] + s[2] * s[2]));
+    const float gi =
+        inv_knee2 > 0 ? 1.0f / std::sqrt(1.0f + inv_knee2 * (s[1] * s[1] + s[2] * s[2])) : 1.0f;
     const float gx = gi * s[1], gy = gi * s[2];
     storeJacobianRow(out.ji, m, p, gx * dux, gy * dvy, gx * duz + gy * dvz);
     out.ri[m] = gi * (s[0] - q[3]);

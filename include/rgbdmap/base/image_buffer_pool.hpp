@@ -9,9 +9,9 @@ namespace rgbdmap {
 
 // Image buffers kept once let go and handed out again for the next image of the same size,
 // instead of going back to the system. A camera-sized buffer is above glibc's mmap threshold
-// (base/run_stats.cpp), so without the pool every copy maps fresh memory that the kernel zeroes
-// page by page on first touch: on our machines copying one 640 x 480 colour + depth keyframe cost
-// 6 ms that way, most of the tracking thread's time on a keyframe (docs/benchmarks.md).
+// (base/run_stats.cpp), so without the pool every copy maps fresh memory, faulted in page by page
+// on first touch: on our machines copying one 640 x 480 colour + depth keyframe cost 6 ms that
+// way, most of the tracking thread's time on a keyframe (docs/benchmarks.md).
 // Thread-safe: a buffer may be let go on another thread than the one that took it.
 class ImageBufferPool final : public cv::MatAllocator {
  public:
