@@ -11,16 +11,9 @@
 namespace rgbdmap {
 namespace {
 
-cv::Mat imageFrom(ImageBufferPool& pool, int rows, int cols, int type) {
-  cv::Mat image;
-  image.allocator = &pool;
-  image.create(rows, cols, type);
-  return image;
-}
-
 TEST(ImageBufferPool, AnImageLetGoIsReusedForTheNextOfItsSize) {
   ImageBufferPool pool(16u << 20);
-  cv::Mat depth = imageFrom(pool, 480, 640, CV_32FC1);
+  cv::Mat depth = pool.image(480, 640, CV_32FC1);
   const uchar* buffer = depth.data;
   depth.setTo(1.5f);
   cv::Mat shared = depth;  // a header sharing the buffer keeps it from the pool
@@ -29,12 +22,12 @@ TEST(ImageBufferPool, AnImageLetGoIsReusedForTheNextOfItsSize) {
   shared.release();
   EXPECT_EQ(pool.keptBytes(), 480u * 640u * 4u);
 
-  cv::Mat again = imageFrom(pool, 480, 640, CV_32FC1);
+  cv::Mat again = pool.image(480, 640, CV_32FC1);
   EXPECT_EQ(again.data, buffer);
   EXPECT_EQ(pool.allocations(), 1u);
   // Another size is a buffer of its own; an OpenCV function writing into a pooled image of the
   // size and type it makes keeps the buffer.
-  cv::Mat gray = imageFrom(pool, 480, 640, CV_8UC1);
+  cv::Mat gray = pool.image(480, 640, CV_8UC1);
   const uchar* gray_buffer = gray.data;
   cv::Mat color(480, 640, CV_8UC3, cv::Scalar(10, 20, 30));
   cv::cvtColor(color, gray, cv::COLOR_BGR2GRAY);
@@ -47,8 +40,8 @@ TEST(ImageBufferPool, AnImageLetGoIsReusedForTheNextOfItsSize) {
 TEST(ImageBufferPool, KeepsNoMoreThanItsLimit) {
   ImageBufferPool pool(1u << 20);
   {
-    cv::Mat a = imageFrom(pool, 480, 640, CV_16UC1);  // 600 KB each
-    cv::Mat b = imageFrom(pool, 480, 640, CV_16UC1);
+    cv::Mat a = pool.image(480, 640, CV_16UC1);  // 600 KB each
+    cv::Mat b = pool.image(480, 640, CV_16UC1);
     a.setTo(1);
     b.setTo(2);
   }
@@ -58,7 +51,7 @@ TEST(ImageBufferPool, KeepsNoMoreThanItsLimit) {
 
 TEST(ImageBufferPool, ABufferLetGoOnAnotherThreadIsReused) {
   ImageBufferPool pool(16u << 20);
-  cv::Mat depth = imageFrom(pool, 480, 640, CV_32FC1);
+  cv::Mat depth = pool.image(480, 640, CV_32FC1);
   const uchar* buffer = depth.data;
   depth.setTo(2.0f);
   double sum = 0;
@@ -68,7 +61,7 @@ TEST(ImageBufferPool, ABufferLetGoOnAnotherThreadIsReused) {
   });
   reader.join();
   EXPECT_DOUBLE_EQ(sum, 2.0 * 480 * 640);
-  cv::Mat again = imageFrom(pool, 480, 640, CV_32FC1);
+  cv::Mat again = pool.image(480, 640, CV_32FC1);
   EXPECT_EQ(again.data, buffer);
   again.setTo(3.0f);  // written here after the reader's reads there
   EXPECT_EQ(pool.allocations(), 1u);
@@ -80,10 +73,10 @@ TEST(ImageBufferPool, ReservedBuffersServeTheFirstImages) {
   pool.reserve(480, 640, CV_8UC3, 2);  // already there
   EXPECT_EQ(pool.allocations(), 3u);
   std::vector<cv::Mat> images;
-  for (int i = 0; i < 3; ++i) images.push_back(imageFrom(pool, 480, 640, CV_8UC3));
+  for (int i = 0; i < 3; ++i) images.push_back(pool.image(480, 640, CV_8UC3));
   EXPECT_EQ(pool.allocations(), 3u);
   EXPECT_EQ(pool.keptBytes(), 0u);
-  images.push_back(imageFrom(pool, 480, 640, CV_8UC3));
+  images.push_back(pool.image(480, 640, CV_8UC3));
   EXPECT_EQ(pool.allocations(), 4u);
 }
 

@@ -64,6 +64,13 @@ void ImageBufferPool::deallocate(cv::UMatData* u) const {
   delete u;
 }
 
+cv::Mat ImageBufferPool::image(int rows, int cols, int type) {
+  cv::Mat out;
+  out.allocator = this;
+  out.create(rows, cols, type);
+  return out;
+}
+
 void ImageBufferPool::reserve(int rows, int cols, int type, int count) {
   const std::size_t bytes = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) *
                             static_cast<std::size_t>(CV_ELEM_SIZE(type));
@@ -95,10 +102,7 @@ ImageBufferPool& imageBufferPool() {
 }
 
 cv::Mat pooledImage(int rows, int cols, int type) {
-  cv::Mat image;
-  image.allocator = &imageBufferPool();
-  image.create(rows, cols, type);
-  return image;
+  return imageBufferPool().image(rows, cols, type);
 }
 
 cv::Mat pooledCopy(const cv::Mat& image) {

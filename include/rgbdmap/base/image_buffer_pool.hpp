@@ -24,6 +24,11 @@ class ImageBufferPool final : public cv::MatAllocator {
   bool allocate(cv::UMatData* data, cv::AccessFlag flags, cv::UMatUsageFlags usage) const override;
   void deallocate(cv::UMatData* data) const override;
 
+  // An uninitialised `rows` x `cols` image of `type` whose buffer comes from this pool. OpenCV
+  // functions writing into it keep its buffer when size and type match; copies of the Mat header
+  // share it, and the last one let go returns it to the pool.
+  cv::Mat image(int rows, int cols, int type);
+
   // Makes sure `count` buffers for `rows` x `cols` images of `type` are kept, allocating and
   // touching the missing ones now: a user that knows how many images it will hold at once pays
   // for their memory before the first frame, not on it.
@@ -43,9 +48,7 @@ class ImageBufferPool final : public cv::MatAllocator {
 // The process's pool (32 MB kept at most). Never destroyed: an image may outlive any owner.
 ImageBufferPool& imageBufferPool();
 
-// An uninitialised image in a buffer from the process's pool, for images made again and again
-// (keyframes' copies). OpenCV functions writing into it keep its buffer when size and type
-// match; copies of the Mat header share it, and the last one let go returns it to the pool.
+// imageBufferPool().image(): for images made again and again (keyframes' copies).
 cv::Mat pooledImage(int rows, int cols, int type);
 // A deep copy of `image` in a pooled buffer.
 cv::Mat pooledCopy(const cv::Mat& image);
