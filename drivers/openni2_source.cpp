@@ -147,11 +147,9 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
   std::uint64_t depth_stamp = 0;  // device clock, µs
   std::uint64_t color_stamp = 0;
   const Clock::time_point deadline = Clock::now() + kReadTimeout;
+  // Frames the camera sent before it was unplugged are still read: the unplug is reported only
+  // when nothing is waiting (a run that starts reading late still maps the camera's last frames).
   while (!have_depth || !have_color) {
-    if (dev_->watch() && dev_->watch()->disconnected()) {
-      spdlog::warn("{}: OpenNI2 reports the device disconnected", label());
-      return ReadStatus::kTimeout;
-    }
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left.count() <= 0) {
@@ -169,7 +167,13 @@ ReadStatus OpenNI2Source::read(Frame& frame) {
     // Short waits, so an unplug event is noticed promptly.
     int ready = -1;
     const int wait_ms = static_cast<int>(std::min<long>(left.count(), 100));
-    const openni::Status status = openni::OpenNI::waitForAnyStream(streams, 2, &ready, wait_ms);
+    const bool gone = dev_->watch() && dev_->watch()->disconnected();
+    const openni::Status status =
+        openni::OpenNI::waitForAnyStream(streams, 2, &ready, gone ? 0 : wait_ms);
+    if (status != openni::STATUS_OK && gone) {
+      spdlog::warn("{}: OpenNI2 reports the device disconnected", label());
+      return ReadStatus::kTimeout;
+    }
     if (status == openni::STATUS_TIME_OUT) continue;
     if (status != openni::STATUS_OK) {
       spdlog::debug("{}: waiting for frames: {}", label(), openni2::lastError());

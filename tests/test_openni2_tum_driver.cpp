@@ -19,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -28,6 +29,7 @@
 
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/config/config.hpp"
+#include "rgbdmap/drivers/openni2_source.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -530,6 +532,28 @@ TEST_F(OpenNI2TumDriver, DisconnectAfterStopsAfterExactlyNFramesAndReplugContinu
     EXPECT_EQ(differences(second[i].image, expectedDepth100um(rawDepth(sequence, entry))), 0);
   }
   EXPECT_TRUE(events.waitDisconnected(2, std::chrono::seconds(2)));
+}
+
+// A camera unplugged before the program read anything (a run that starts reading late: a slow
+// machine builds its pipeline after opening the camera) still gives the frames it sent; the
+// unplug is reported once nothing is waiting. The run's map then holds them and its outage
+// checkpoint is not skipped as "no new frame".
+TEST_F(OpenNI2TumDriver, FramesSentBeforeAnUnplugAreReadBeforeTheUnplugIsReported) {
+  const std::string uri =
+      "tum:" + test::tumDir(kXyz) + "?disconnect_after=5&reconnect_after_ms=60000";
+  // Declared first, so the source (and its share of OpenNI2) outlives the listener.
+  std::unique_ptr<FrameSource> source;
+  PlugEvents events(uri);
+  CameraOptions camera;
+  source = openOpenNI2Source(uri, camera, 1.0);
+  ASSERT_TRUE(events.waitDisconnected(1, std::chrono::seconds(60)))
+      << "the device was never unplugged";
+  Frame frame;
+  ASSERT_EQ(source->read(frame), ReadStatus::kFrame);
+  EXPECT_FALSE(frame.depth.empty());
+  EXPECT_FALSE(frame.color.empty());
+  EXPECT_GT(cv::countNonZero(frame.depth > 0), 100000);
+  EXPECT_EQ(source->read(frame), ReadStatus::kTimeout);
 }
 
 TEST_F(OpenNI2TumDriver, LoopStartsOverWithIncreasingIndicesAndTimestamps) {
