@@ -18,6 +18,9 @@ Keys Config::keys() {
   keys.push_back(lens);
   keys.push_back(formerName("tracking.undistort", lens));
   keys.push_back(formerName("filter.undistort", lens));
+  keys.push_back(number("camera.readout", &tracking.readout, 0, 0.1,
+                        "rolling shutter: seconds from reading the image's first row to its last, "
+                        "undone in tracking with the camera's motion (0 = global shutter)"));
   append(keys, replayKeys(replay));
   append(keys, queueKeys(queue));
   append(keys, poseKeys(pose));

@@ -50,6 +50,7 @@ std::vector<LoopMeasurement> KeyframeWindow::add(
   pyramid_.build(frame, camera_, tracking_.coarsest_level + 1, tracking_.finest_level,
                  tracking_.undistort, min_depth_, max_depth_);
   const Eigen::Isometry3d later = pose(id);
+  aligner_.setReadoutMotion(keyframe.readout);
   for (const Entry& earlier : entries_) {
     if (earlier.id == keyframe.reference) continue;  // the tracker's own edge
     const Eigen::Isometry3d guess = later.inverse() * pose(earlier.id);
@@ -77,7 +78,7 @@ std::vector<LoopMeasurement> KeyframeWindow::add(
   }
   entry.id = id;
   entry.reference.build(pyramid_, tracking_.finest_level, tracking_.coarsest_level,
-                        static_cast<float>(tracking_.min_gradient));
+                        static_cast<float>(tracking_.min_gradient), keyframe.readout);
   entries_.push_back(std::move(entry));
   return measured;
 }

@@ -75,20 +75,32 @@ float robustSigma(std::vector<float>& values, float fallback) {
 // the robust scales). With `quadratic_noise`, depth residuals and their rows are divided by z^2.
 // With `inv_knee2` (1 / knee^2, or 0), intensity residuals and their rows are divided by
 // sqrt(1 + |gradient|^2 / knee^2): about knee / |gradient| where the image is steeper than knee.
+// With a rolling shutter (`readout` not zero), a point is looked up where the camera was when
+// the row it lands on was read (to first order: the motion over one readout is small).
 RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
                                        const PyramidLevel& level, const Eigen::Matrix3f& R,
                                        const Eigen::Vector3f& t, bool quadratic_noise,
-                                       float inv_knee2, Residuals& out, std::vector<float>& abs_i,
+                                       float inv_knee2, const ReadoutMotion& readout,
+                                       Residuals& out, std::vector<float>& abs_i,
                                        std::vector<float>& abs_z) {
+  const bool rolling = !readout.isZero();
+  const Eigen::Vector3f w = readout.head<3>(), dt = readout.tail<3>();
   const LevelCamera& c = level.camera;
+  const float inv_height = 1.0f / static_cast<float>(c.height);
   const float umax = static_cast<float>(c.width - 2), vmax = static_cast<float>(c.height - 2);
   out.reset(points.size());
   std::size_t m = 0;
   for (std::size_t n = 0; n < points.size(); ++n) {
     const Eigen::Vector4f& q = points[n];
-    const Eigen::Vector3f p = R * q.head<3>() + t;
+    Eigen::Vector3f p = R * q.head<3>() + t;
     if (p.z() <= 0.05f) continue;
-    const float iz = 1.0f / p.z();
+    float iz = 1.0f / p.z();
+    if (rolling) {
+      const float s = (c.fy * p.y() * iz + c.cy) * inv_height - 0.5f;
+      const Eigen::Vector3f shift = s * (w.cross(p) + dt);
+      p -= shift;
+      iz *= 1.0f + shift.z() * iz;  // 1 / (z - dz) to first order: dz is a fraction of a mm
+    }
     const float u = c.fx * p.x() * iz + c.cx, v = c.fy * p.y() * iz + c.cy;
     if (!(u >= 1.0f && v >= 1.0f && u < umax && v < vmax)) continue;
     bool depth_ok = false;
@@ -237,7 +249,8 @@ void DenseAligner::Residuals::padToLanes() {
 }
 
 void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coarsest,
-                               float min_gradient) {
+                               float min_gradient, const ReadoutMotion& readout) {
+  const Eigen::Vector3f w = readout.head<3>(), dt = readout.tail<3>();
   levels.resize(static_cast<std::size_t>(coarsest + 1));
   valid_pixels = 0;
   for (int l = finest; l <= coarsest; ++l) {
@@ -262,7 +275,11 @@ void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coar
         }
         const float px = (static_cast<float>(x) - c.cx) / c.fx * z[x];
         const float py = (static_cast<float>(y) - c.cy) / c.fy * z[x];
-        out.points.emplace_back(px, py, z[x], g[x]);
+        // Seen from the camera at mid-readout: this row was read s readouts after it.
+        const float s = static_cast<float>(y) / static_cast<float>(c.height) - 0.5f;
+        const Eigen::Vector3f p(px, py, z[x]);
+        const Eigen::Vector3f mid = p + s * (w.cross(p) + dt);
+        out.points.emplace_back(mid.x(), mid.y(), mid.z(), g[x]);
       }
     }
   }
@@ -299,7 +316,7 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       abs_i.clear();
       abs_z.clear();
       residualsAt(points, level, R, t, quadratic_noise, l == finest ? 0.0f : coarse_inv_knee2,
-                  residuals, abs_i, abs_z);
+                  readout_, residuals, abs_i, abs_z);
       landed = residuals.size;
       if (landed < 12) break;
       // On the finest level only: while coarse levels bring the frame into place, a misalignment

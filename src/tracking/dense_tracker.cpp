@@ -90,6 +90,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
       out.from_reference = rigid(from->pose.inverse() * pose);
       out.information = alignment.information;
     }
+    out.readout = readoutMotion();
     out.color = pooledCopy(frame.color);
     out.depth = pooledCopy(frame.depth);
     sink_->addKeyframe(std::move(out));
@@ -97,7 +98,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
   auto keyframe = std::make_shared<Keyframe>();
   keyframe->id = next_id_;
   keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
-                            static_cast<float>(options_.min_gradient));
+                            static_cast<float>(options_.min_gradient), readoutMotion());
   keyframe->pose = pose;
   relocaliser_.remember(frame, keyframe->view);
   keyframes_.push_back(keyframe);
@@ -148,6 +149,7 @@ bool DenseTracker::estimate(Frame& frame) {
   for (int i = 0; i < static_cast<int>(periods); ++i) predicted = predicted * velocity_;
   predicted = rigid(predicted);
 
+  aligner_.setReadoutMotion(readoutMotion());
   if (lost_) {
     Eigen::Isometry3d pose;
     if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_);
@@ -176,6 +178,16 @@ bool DenseTracker::estimate(Frame& frame) {
       last_result_.overlap < options_.keyframe_min_overlap)
     makeKeyframe(frame, pose, keyframe_.get(), last_result_);
   return true;
+}
+
+ReadoutMotion DenseTracker::readoutMotion() const {
+  ReadoutMotion motion = ReadoutMotion::Zero();
+  if (options_.readout <= 0) return motion;
+  const double share = options_.readout / frame_period_;
+  const Eigen::AngleAxisd turn(velocity_.linear());
+  motion.head<3>() = (share * turn.angle() * turn.axis()).cast<float>();
+  motion.tail<3>() = (share * velocity_.translation()).cast<float>();
+  return motion;
 }
 
 bool DenseTracker::relocalise(const Frame& frame, Eigen::Isometry3d& pose) {

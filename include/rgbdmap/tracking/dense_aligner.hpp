@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "rgbdmap/tracking/image_pyramid.hpp"
+#include "rgbdmap/tracking/readout_motion.hpp"
 #include "rgbdmap/tracking/tracking_options.hpp"
 
 namespace rgbdmap {
@@ -22,7 +23,9 @@ struct AlignmentReference {
 
   // Takes pixels with depth from levels finest..coarsest of `pyramid`. On the finest level,
   // pixels with an intensity gradient under min_gradient are taken every other row and column.
-  void build(const ImagePyramid& pyramid, int finest, int coarsest, float min_gradient);
+  // With a rolling shutter, each point is moved to where the camera was at mid-readout.
+  void build(const ImagePyramid& pyramid, int finest, int coarsest, float min_gradient,
+             const ReadoutMotion& readout = ReadoutMotion::Zero());
 };
 
 struct AlignmentResult {
@@ -62,6 +65,8 @@ class DenseAligner {
   explicit DenseAligner(const TrackingOptions& options) : options_(options) {}
   AlignmentResult align(const AlignmentReference& reference, const ImagePyramid& current,
                         const Eigen::Isometry3d& guess);
+  // The current frame's motion during its readout, for the alignments that follow.
+  void setReadoutMotion(const ReadoutMotion& readout) { readout_ = readout; }
 
  private:
   TrackingOptions options_;
@@ -69,6 +74,7 @@ class DenseAligner {
   // zeroed page by page (half of a replay's page faults).
   Residuals residuals_;
   std::vector<float> abs_i_, abs_z_;
+  ReadoutMotion readout_ = ReadoutMotion::Zero();
 };
 
 }  // namespace rgbdmap

@@ -48,6 +48,8 @@ class DenseTracker : public PoseProvider {
   void makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose, const Keyframe* from,
                     const AlignmentResult& alignment);
   bool relocalise(const Frame& frame, Eigen::Isometry3d& pose);
+  // The camera's motion over a frame's readout (camera.readout), at the last velocity.
+  ReadoutMotion readoutMotion() const;
   bool accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state);
   bool lose(Frame& frame, const Eigen::Isometry3d& predicted);
 

@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 
 #include "rgbdmap/base/frame.hpp"
+#include "rgbdmap/tracking/readout_motion.hpp"
 
 namespace rgbdmap {
 
@@ -22,6 +23,8 @@ struct TrackedKeyframe {
   // [translation, rotation] applied on the right (in this keyframe's camera).
   Eigen::Isometry3d from_reference = Eigen::Isometry3d::Identity();
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Identity();
+  // The camera's motion over its readout (a rolling shutter's; zero for a global one).
+  ReadoutMotion readout = ReadoutMotion::Zero();
   cv::Mat color;  // CV_8UC3 BGR, full resolution; the receiver's own (never written again)
   cv::Mat depth;  // CV_32FC1 metres
 

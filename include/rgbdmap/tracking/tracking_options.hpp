@@ -20,6 +20,9 @@ struct TrackingOptions {
   // Resample the finest level to a pinhole camera when the lens distorts (key camera.undistort,
   // which sets FilterOptions::undistort too: one lens).
   bool undistort = true;
+  // A rolling shutter's readout time (s; key camera.readout): the camera's motion over it, from
+  // the last frame's velocity, is undone row by row. 0: a global shutter.
+  double readout = 0.0;
   int max_iterations = 12;    // Gauss-Newton steps per level (coarse levels)
   int finest_iterations = 6;  // on the finest level, where a step costs the most
   double depth_weight = 0.1;  // weight of a (normalised) depth residual vs an intensity one
