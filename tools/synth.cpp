@@ -233,6 +233,12 @@ void addSynthCommand(CLI::App& app, Command& selected) {
                   "intrinsics (a miscalibrated camera)")
       ->capture_default_str()
       ->check(CLI::Range(-0.19, 0.19));
+  cmd->add_option("--readout", o->sequence.readout,
+                  "sensor: a rolling shutter that reads the rows over this many seconds, top to "
+                  "bottom (a Kinect's colour camera: about 0.013); map it with --set "
+                  "camera.readout=S")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.1));
   cmd->add_option("--brightness-drift", o->sequence.brightness_drift,
                   "sensor error: the colour gain swings by +-this fraction every 6 s "
                   "(auto-exposure)")

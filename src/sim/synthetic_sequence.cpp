@@ -65,6 +65,8 @@ void validate(const SyntheticSequenceOptions& o) {
           "depth offset + jitter must stay below TUM's 0.02 s association window");
   require(o.depth_offset + o.depth_offset_jitter < 0.5 / o.fps,
           "depth offset + jitter must be under half a frame interval");
+  require(o.readout >= 0.0 && o.readout <= 1.0 / o.fps,
+          "readout must be in [0, one frame interval]");
   require(o.groundtruth_rate >= o.fps, "groundtruth_rate must be at least fps");
   require(o.camera.width > 0 && o.camera.height > 0 && o.camera.fx > 0 && o.camera.fy > 0,
           "camera intrinsics must be positive");
@@ -155,6 +157,7 @@ void writeOptions(const std::string& path, const SyntheticSequenceOptions& o,
   out << YAML::Key << "depth_scale_error" << YAML::Value << o.depth_scale_error;
   out << YAML::Key << "focal_error" << YAML::Value << o.focal_error;
   out << YAML::Key << "brightness_drift" << YAML::Value << o.brightness_drift;
+  if (o.readout > 0) out << YAML::Key << "readout" << YAML::Value << o.readout;
   out << YAML::Key << "camera" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "width" << YAML::Value << o.camera.width;
   out << YAML::Key << "height" << YAML::Value << o.camera.height;
@@ -237,15 +240,22 @@ SyntheticRenderer::SyntheticRenderer(const SyntheticScene& scene, const CameraIn
 
 void SyntheticRenderer::render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv::Mat& color,
                                cv::Mat& incidence_cos, cv::Mat& hits) const {
+  render(std::vector<Eigen::Isometry3d>(static_cast<std::size_t>(camera_.height), pose), depth,
+         color, incidence_cos, hits);
+}
+
+void SyntheticRenderer::render(const std::vector<Eigen::Isometry3d>& row_poses, cv::Mat& depth,
+                               cv::Mat& color, cv::Mat& incidence_cos, cv::Mat& hits) const {
   const int width = camera_.width, height = camera_.height;
   depth.create(height, width, CV_32FC1);
   color.create(height, width, CV_8UC3);
   incidence_cos.create(height, width, CV_32FC1);
   hits.create(height, width, CV_32FC3);
-  const Eigen::Matrix3d rotation = pose.linear();
-  const Eigen::Vector3d origin = pose.translation();
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     for (int v = rows.start; v < rows.end; ++v) {
+      const Eigen::Isometry3d& pose = row_poses[static_cast<std::size_t>(v)];
+      const Eigen::Matrix3d rotation = pose.linear();
+      const Eigen::Vector3d origin = pose.translation();
       auto* depth_row = depth.ptr<float>(v);
       auto* color_row = color.ptr<cv::Vec3b>(v);
       auto* cos_row = incidence_cos.ptr<float>(v);
@@ -477,6 +487,7 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     color_from_depth.linear() = Eigen::AngleAxisd(rotation.norm(), rotation.normalized()).matrix();
   color_from_depth.translation() = options.depth_camera_position;
   cv::Mat color_depth, color_incidence, color_hits, depth_color;
+  std::vector<Eigen::Isometry3d> row_poses(static_cast<std::size_t>(camera.height));
   std::mt19937_64 stamp_random(options.seed ^ 0x5EEDull);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
 
@@ -485,13 +496,17 @@ SyntheticSequenceSummary writeSyntheticSequence(const std::string& folder,
     const double rgb_stamp = options.start_time + t;
     const double depth_stamp =
         rgb_stamp + options.depth_offset + options.depth_offset_jitter * unit(stamp_random);
+    // Row v read (v / height - 1/2) readouts after the stamp.
+    for (int v = 0; v < camera.height; ++v)
+      row_poses[static_cast<std::size_t>(v)] =
+          path.pose(t + (static_cast<double>(v) / camera.height - 0.5) * options.readout);
     if (unregistered) {
       // Colour from the colour camera; depth, and the surface it measures, from the depth one.
-      renderer.render(path.pose(t), color_depth, color, color_incidence, color_hits);
-      depth_renderer.render(path.pose(t) * color_from_depth, depth, depth_color, incidence_cos,
-                            hits);
+      renderer.render(row_poses, color_depth, color, color_incidence, color_hits);
+      for (Eigen::Isometry3d& pose : row_poses) pose = pose * color_from_depth;
+      depth_renderer.render(row_poses, depth, depth_color, incidence_cos, hits);
     } else {
-      renderer.render(path.pose(t), depth, color, incidence_cos, hits);
+      renderer.render(row_poses, depth, color, incidence_cos, hits);
     }
     const double gain = 1.0 + options.brightness_drift * std::sin(2.0 * M_PI * t / 6.0);
     if (gain != 1.0) color.convertTo(color, -1, gain);

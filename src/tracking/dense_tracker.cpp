@@ -100,6 +100,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
   keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
                             static_cast<float>(options_.min_gradient), readoutMotion());
   keyframe->pose = pose;
+  keyframe->points_as_read = options_.readout > 0 && !velocity_measured_;
   relocaliser_.remember(frame, keyframe->view);
   keyframes_.push_back(keyframe);
   while (static_cast<int>(keyframes_.size()) > std::max(1, options_.relocalisation_keyframes))
@@ -139,6 +140,7 @@ bool DenseTracker::estimate(Frame& frame) {
     started_ = true;
     makeKeyframe(frame, Eigen::Isometry3d::Identity(), nullptr, AlignmentResult{});
     velocity_.setIdentity();
+    velocity_measured_ = false;
     return accept(frame, Eigen::Isometry3d::Identity(), TrackingState::kTracked);
   }
   // Frame periods since the last frame (more than one when frames were dropped or cut out).
@@ -154,6 +156,7 @@ bool DenseTracker::estimate(Frame& frame) {
     Eigen::Isometry3d pose;
     if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_);
     velocity_.setIdentity();
+    velocity_measured_ = false;
     return accept(frame, pose, TrackingState::kRelocalised);
   }
 
@@ -162,9 +165,11 @@ bool DenseTracker::estimate(Frame& frame) {
   const Eigen::Isometry3d pose = rigid(keyframe_->pose * last_result_.motion.inverse());
   if (reject(last_result_, pose, predicted, periods, true)) {
     velocity_.setIdentity();
+    velocity_measured_ = false;
     return lose(frame, predicted);
   }
   velocity_ = scaled(last_pose_.inverse() * pose, 1.0 / periods);
+  velocity_measured_ = true;
   if (!enough_depth) {
     // The image tracks but the frame has (almost) no depth: nothing to map. Its pose is good, so
     // tracking goes on from it, but the next good frame reports the recovery.
@@ -175,7 +180,7 @@ bool DenseTracker::estimate(Frame& frame) {
   const Eigen::Isometry3d from_keyframe = keyframe_->pose.inverse() * pose;
   if (from_keyframe.translation().norm() > options_.keyframe_translation ||
       angle(from_keyframe) > options_.keyframe_rotation ||
-      last_result_.overlap < options_.keyframe_min_overlap)
+      last_result_.overlap < options_.keyframe_min_overlap || keyframe_->points_as_read)
     makeKeyframe(frame, pose, keyframe_.get(), last_result_);
   return true;
 }

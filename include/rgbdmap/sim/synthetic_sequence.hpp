@@ -5,6 +5,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "rgbdmap/base/frame.hpp"
 #include "rgbdmap/sim/camera_path.hpp"
@@ -50,6 +51,10 @@ struct SyntheticSequenceOptions {
   bool depthUnregistered() const {
     return !depth_camera_position.isZero() || !depth_camera_rotation.isZero() || depth_focal > 0;
   }
+  // A rolling shutter: rows are read one after another over `readout` seconds, top to bottom,
+  // the middle row at the frame's stamp (where the ground truth is); each row is rendered at the
+  // camera's pose when it was read, colour and depth alike. 0: a global shutter.
+  double readout = 0.0;
   double start_time = 1700000000.0;  // first colour stamp (s), Unix-epoch-like as in TUM
   // Depth stamps follow colour by depth_offset + up to depth_offset_jitter (TUM: 5-20 ms,
   // always inside the 0.02 s association window). Both images are rendered at the colour
@@ -87,6 +92,9 @@ class SyntheticRenderer {
   // depth: CV_32FC1, color: CV_8UC3, incidence_cos: CV_32FC1, hits: CV_32FC3 world points.
   void render(const Eigen::Isometry3d& pose, cv::Mat& depth, cv::Mat& color, cv::Mat& incidence_cos,
               cv::Mat& hits) const;
+  // The same with row v seen from row_poses[v] (a rolling shutter): one pose per row.
+  void render(const std::vector<Eigen::Isometry3d>& row_poses, cv::Mat& depth, cv::Mat& color,
+              cv::Mat& incidence_cos, cv::Mat& hits) const;
 
  private:
   const SyntheticScene& scene_;

@@ -40,6 +40,9 @@ class DenseTracker : public PoseProvider {
     AlignmentReference reference;
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     RelocalisationView view;  // features for relocalisation
+    // Made with a rolling shutter before the camera's velocity was measured (the first frame):
+    // its points are as read, not at mid-readout, so the next tracked frame replaces it.
+    bool points_as_read = false;
   };
   // Why an alignment was rejected, or nullptr when it is plausible.
   const char* reject(const AlignmentResult& result, const Eigen::Isometry3d& pose,
@@ -65,6 +68,7 @@ class DenseTracker : public PoseProvider {
   AlignmentResult last_result_;
   Eigen::Isometry3d last_pose_ = Eigen::Isometry3d::Identity();  // last good pose
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();   // per frame, last good pair
+  bool velocity_measured_ = false;  // velocity_ is from a tracked pair, not a reset
   double last_timestamp_ = 0.0;
   double frame_period_ = 1.0 / 30.0;
   bool started_ = false;
