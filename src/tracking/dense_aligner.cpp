@@ -262,6 +262,8 @@ void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coar
     const float min_g2 = min_gradient * min_gradient;
     // A border of 2 pixels: a point's sampled neighbours need their own neighbours.
     for (int y = 2; y + 2 < c.height; ++y) {
+      // Seen from the camera at mid-readout: this row was read s readouts after it.
+      const float s = static_cast<float>(y) / static_cast<float>(c.height) - 0.5f;
       const float* z = source.depth.ptr<float>(y);
       const float* g = source.gray.ptr<float>(y);
       const float* gu = source.gray.ptr<float>(y - 1);
@@ -275,8 +277,6 @@ void AlignmentReference::build(const ImagePyramid& pyramid, int finest, int coar
         }
         const float px = (static_cast<float>(x) - c.cx) / c.fx * z[x];
         const float py = (static_cast<float>(y) - c.cy) / c.fy * z[x];
-        // Seen from the camera at mid-readout: this row was read s readouts after it.
-        const float s = static_cast<float>(y) / static_cast<float>(c.height) - 0.5f;
         const Eigen::Vector3f p(px, py, z[x]);
         const Eigen::Vector3f mid = p + s * (w.cross(p) + dt);
         out.points.emplace_back(mid.x(), mid.y(), mid.z(), g[x]);

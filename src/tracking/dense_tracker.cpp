@@ -80,6 +80,7 @@ const char* DenseTracker::reject(const AlignmentResult& result, const Eigen::Iso
 
 void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose,
                                 const Keyframe* from, const AlignmentResult& alignment) {
+  const ReadoutMotion readout = readoutMotion();
   if (sink_) {  // before `from` may leave the window below
     TrackedKeyframe out;
     out.id = next_id_;
@@ -90,7 +91,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
       out.from_reference = rigid(from->pose.inverse() * pose);
       out.information = alignment.information;
     }
-    out.readout = readoutMotion();
+    out.readout = readout;
     out.color = pooledCopy(frame.color);
     out.depth = pooledCopy(frame.depth);
     sink_->addKeyframe(std::move(out));
@@ -98,7 +99,7 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
   auto keyframe = std::make_shared<Keyframe>();
   keyframe->id = next_id_;
   keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
-                            static_cast<float>(options_.min_gradient), readoutMotion());
+                            static_cast<float>(options_.min_gradient), readout);
   keyframe->pose = pose;
   keyframe->points_as_read = options_.readout > 0 && !velocity_measured_;
   relocaliser_.remember(frame, keyframe->view);
@@ -139,8 +140,7 @@ bool DenseTracker::estimate(Frame& frame) {
     if (!enough_depth) return lose(frame, Eigen::Isometry3d::Identity());
     started_ = true;
     makeKeyframe(frame, Eigen::Isometry3d::Identity(), nullptr, AlignmentResult{});
-    velocity_.setIdentity();
-    velocity_measured_ = false;
+    forgetVelocity();
     return accept(frame, Eigen::Isometry3d::Identity(), TrackingState::kTracked);
   }
   // Frame periods since the last frame (more than one when frames were dropped or cut out).
@@ -155,8 +155,7 @@ bool DenseTracker::estimate(Frame& frame) {
   if (lost_) {
     Eigen::Isometry3d pose;
     if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_);
-    velocity_.setIdentity();
-    velocity_measured_ = false;
+    forgetVelocity();
     return accept(frame, pose, TrackingState::kRelocalised);
   }
 
@@ -164,8 +163,7 @@ bool DenseTracker::estimate(Frame& frame) {
       aligner_.align(keyframe_->reference, pyramid_, rigid(predicted.inverse() * keyframe_->pose));
   const Eigen::Isometry3d pose = rigid(keyframe_->pose * last_result_.motion.inverse());
   if (reject(last_result_, pose, predicted, periods, true)) {
-    velocity_.setIdentity();
-    velocity_measured_ = false;
+    forgetVelocity();
     return lose(frame, predicted);
   }
   velocity_ = scaled(last_pose_.inverse() * pose, 1.0 / periods);
@@ -183,6 +181,11 @@ bool DenseTracker::estimate(Frame& frame) {
       last_result_.overlap < options_.keyframe_min_overlap || keyframe_->points_as_read)
     makeKeyframe(frame, pose, keyframe_.get(), last_result_);
   return true;
+}
+
+void DenseTracker::forgetVelocity() {
+  velocity_.setIdentity();
+  velocity_measured_ = false;
 }
 
 ReadoutMotion DenseTracker::readoutMotion() const {

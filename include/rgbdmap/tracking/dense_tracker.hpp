@@ -51,6 +51,8 @@ class DenseTracker : public PoseProvider {
   void makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pose, const Keyframe* from,
                     const AlignmentResult& alignment);
   bool relocalise(const Frame& frame, Eigen::Isometry3d& pose);
+  // No velocity known any more (the start, a loss, a relocalisation): predict no motion.
+  void forgetVelocity();
   // The camera's motion over a frame's readout (camera.readout), at the last velocity.
   ReadoutMotion readoutMotion() const;
   bool accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state);
