@@ -328,6 +328,8 @@ int Pipeline::run(RunControl& control) {
   status.showUntil([&tracking] { return tracking.done(); }, control.stop);
   capture.join();
   tracking.join();
+  if (const std::string report = tracker.poses().report(); !report.empty())
+    spdlog::info("tracking: {}", report);
   queue.freeImages();
   loop.finish();
   if (fusion.queued() > 0) spdlog::info("fusing the last {} keyframes", fusion.queued());

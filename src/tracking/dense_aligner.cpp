@@ -77,12 +77,18 @@ float robustSigma(std::vector<float>& values, float fallback) {
 // sqrt(1 + |gradient|^2 / knee^2): about knee / |gradient| where the image is steeper than knee.
 // With a rolling shutter (`readout` not zero), a point is looked up where the camera was when
 // the row it lands on was read (to first order: the motion over one readout is small).
+// With `rates` (the frame's and the reference's camera motion per second of readout), also the
+// residuals' derivatives with respect to the readout time (ai, az).
+struct ReadoutRates {
+  Eigen::Vector3f frame_w, frame_v, reference_w, reference_v;
+};
+
 RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
                                        const PyramidLevel& level, const Eigen::Matrix3f& R,
                                        const Eigen::Vector3f& t, bool quadratic_noise,
                                        float inv_knee2, const ReadoutMotion& readout,
-                                       Residuals& out, std::vector<float>& abs_i,
-                                       std::vector<float>& abs_z) {
+                                       const ReadoutRates* rates, Residuals& out,
+                                       std::vector<float>& abs_i, std::vector<float>& abs_z) {
   const bool rolling = !readout.isZero();
   const Eigen::Vector3f w = readout.head<3>(), dt = readout.tail<3>();
   const LevelCamera& c = level.camera;
@@ -95,9 +101,9 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
     Eigen::Vector3f p = R * q.head<3>() + t;
     if (p.z() <= 0.05f) continue;
     float iz = 1.0f / p.z();
+    const float row_share = (c.fy * p.y() * iz + c.cy) * inv_height - 0.5f;
     if (rolling) {
-      const float s = (c.fy * p.y() * iz + c.cy) * inv_height - 0.5f;
-      const Eigen::Vector3f shift = s * (w.cross(p) + dt);
+      const Eigen::Vector3f shift = row_share * (w.cross(p) + dt);
       p -= shift;
       iz *= 1.0f + shift.z() * iz;  // 1 / (z - dz) to first order: dz is a fraction of a mm
     }
@@ -126,6 +132,16 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
       for (auto& column : out.jz) column[m] = 0.0f;
       out.rz[m] = 0.0f;
       out.has_z[m] = 0.0f;
+    }
+    if (rates) {
+      // A longer readout moves the reference's point along its camera's motion (its row's share
+      // of it) and the lookup against the frame's.
+      const Eigen::Vector3f k = q.head<3>();
+      const float sk = (c.fy * k.y() / k.z() + c.cy) * inv_height - 0.5f;
+      const Eigen::Vector3f dp = R * (sk * (rates->reference_w.cross(k) + rates->reference_v)) -
+                                 row_share * (rates->frame_w.cross(p) + rates->frame_v);
+      out.ai[m] = out.ji[0][m] * dp.x() + out.ji[1][m] * dp.y() + out.ji[2][m] * dp.z();
+      out.az[m] = out.jz[0][m] * dp.x() + out.jz[1][m] * dp.y() + out.jz[2][m] * dp.z();
     }
     if ((n & 3) == 0) abs_i.push_back(std::abs(out.ri[m]));
     ++m;
@@ -229,11 +245,27 @@ RGBDMAP_VECTOR_CLONES void normalEquations(const Residuals& r, float inv_i, floa
     for (int j = 0; j < i; ++j) H(i, j) = H(j, i);
 }
 
+// The readout's row of the normal equations beside the motion's (normalEquations' weights):
+// h = sum of w a J, hh = sum of w a^2, g = sum of w a r, for the derivatives a (ai, az).
+void readoutRow(const Residuals& r, float inv_i, float inv_z, float k, float depth_weight,
+                Vector6d& h, double& hh, double& g) {
+  h.setZero();
+  hh = g = 0;
+  const double ci = k * inv_i * inv_i, cz = depth_weight * k * inv_z * inv_z;
+  for (std::size_t m = 0; m < r.size; ++m) {
+    const double wi = ci / std::max(std::abs(r.ri[m] * inv_i), k);
+    const double wz = r.has_z[m] * cz / std::max(std::abs(r.rz[m] * inv_z), k);
+    for (int j = 0; j < 6; ++j) h(j) += wi * r.ai[m] * r.ji[j][m] + wz * r.az[m] * r.jz[j][m];
+    hh += wi * r.ai[m] * r.ai[m] + wz * r.az[m] * r.az[m];
+    g += wi * r.ai[m] * r.ri[m] + wz * r.az[m] * r.rz[m];
+  }
+}
+
 }  // namespace
 
-std::array<std::vector<float>*, 15> DenseAligner::Residuals::columns() {
-  return {&ji[0], &ji[1], &ji[2], &ji[3], &ji[4], &ji[5], &jz[0], &jz[1],
-          &jz[2], &jz[3], &jz[4], &jz[5], &ri,    &rz,    &has_z};
+std::array<std::vector<float>*, 17> DenseAligner::Residuals::columns() {
+  return {&ji[0], &ji[1], &ji[2], &ji[3], &ji[4], &ji[5], &jz[0], &jz[1], &jz[2],
+          &jz[3], &jz[4], &jz[5], &ri,    &rz,    &has_z, &ai,    &az};
 }
 
 void DenseAligner::Residuals::reset(std::size_t capacity) {
@@ -303,6 +335,9 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   const bool brightness_offset = options_.brightness == "offset";
   const float brightness_tolerance = static_cast<float>(options_.brightness_tolerance);
   float offset = 0.0f;
+  const bool estimate_readout = !readout_rate_.isZero();
+  const ReadoutRates rates{readout_rate_.head<3>(), readout_rate_.tail<3>(),
+                           reference.readout_rate.head<3>(), reference.readout_rate.tail<3>()};
 
   for (int l = coarsest; l >= finest; --l) {
     const auto& points = reference.levels[static_cast<std::size_t>(l)].points;
@@ -310,13 +345,15 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
     const int iterations = l == finest ? options_.finest_iterations : options_.max_iterations;
     std::size_t landed = 0;
     Matrix6d H = Matrix6d::Zero();
+    Vector6d b = Vector6d::Zero();
     for (int it = 0; it < iterations; ++it) {
       const Eigen::Matrix3f R = motion.linear().cast<float>();
       const Eigen::Vector3f t = motion.translation().cast<float>();
       abs_i.clear();
       abs_z.clear();
       residualsAt(points, level, R, t, quadratic_noise, l == finest ? 0.0f : coarse_inv_knee2,
-                  readout_, residuals, abs_i, abs_z);
+                  readout_, estimate_readout && l == finest ? &rates : nullptr, residuals, abs_i,
+                  abs_z);
       landed = residuals.size;
       if (landed < 12) break;
       // On the finest level only: while coarse levels bring the frame into place, a misalignment
@@ -325,7 +362,6 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
         offset = subtractOffset(residuals, offset, sigma_i, k, brightness_tolerance, abs_i);
       sigma_i = robustSigma(abs_i, sigma_i);
       sigma_z = robustSigma(abs_z, sigma_z);
-      Vector6d b;
       normalEquations(residuals, 1.0f / sigma_i, 1.0f / sigma_z, k, depth_weight, H, b);
       const Vector6d step = H.ldlt().solve(-b);
       if (!step.allFinite()) break;
@@ -340,6 +376,19 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
         result.information = H / static_cast<double>(landed);
         Eigen::SelfAdjointEigenSolver<Matrix6d> eig(result.information, Eigen::EigenvaluesOnly);
         result.min_information = eig.eigenvalues()(0);
+      }
+      if (estimate_readout && landed >= 12) {
+        // Given the motion at its optimum (b is almost zero there), what the readout adds: the
+        // readout's equation once the motion's is eliminated (Schur complement).
+        Vector6d h;
+        double hh, g;
+        readoutRow(residuals, 1.0f / sigma_i, 1.0f / sigma_z, k, depth_weight, h, hh, g);
+        const auto ldlt = H.ldlt();
+        const double information = hh - h.dot(ldlt.solve(h));
+        if (information > 0 && std::isfinite(information)) {
+          result.readout_information = information;
+          result.readout_step = -(g - h.dot(ldlt.solve(b))) / information;
+        }
       }
     }
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "rgbdmap/base/image_buffer_pool.hpp"
 
@@ -38,6 +39,9 @@ DenseTracker::DenseTracker(const CameraIntrinsics& camera, const TrackingOptions
       aligner_(options),
       relocaliser_(camera, options.relocalisation_min_inliers, min_depth, max_depth),
       sink_(sink),
+      readout_(options.readout),
+      readout_mean_(options.readout),
+      readout_weight_(options.readout_prior_weight),
       first_id_(sink ? sink->firstKeyframeId() : 0),
       next_id_(first_id_) {
   // The images a keyframe keeps (relocalisation's grey and depth while it is among the recent
@@ -100,8 +104,9 @@ void DenseTracker::makeKeyframe(const Frame& frame, const Eigen::Isometry3d& pos
   keyframe->id = next_id_;
   keyframe->reference.build(pyramid_, options_.finest_level, options_.coarsest_level,
                             static_cast<float>(options_.min_gradient), readout);
+  keyframe->reference.readout_rate = readoutRate();
   keyframe->pose = pose;
-  keyframe->points_as_read = options_.readout > 0 && !velocity_measured_;
+  keyframe->points_as_read = (readout_ > 0 || options_.estimate_readout) && !velocity_measured_;
   relocaliser_.remember(frame, keyframe->view);
   keyframes_.push_back(keyframe);
   while (static_cast<int>(keyframes_.size()) > std::max(1, options_.relocalisation_keyframes))
@@ -152,6 +157,7 @@ bool DenseTracker::estimate(Frame& frame) {
   predicted = rigid(predicted);
 
   aligner_.setReadoutMotion(readoutMotion());
+  aligner_.setReadoutRate(options_.estimate_readout ? readoutRate() : ReadoutMotion::Zero());
   if (lost_) {
     Eigen::Isometry3d pose;
     if (!enough_depth || !relocalise(frame, pose)) return lose(frame, last_pose_);
@@ -166,6 +172,7 @@ bool DenseTracker::estimate(Frame& frame) {
     forgetVelocity();
     return lose(frame, predicted);
   }
+  measureReadout();
   velocity_ = scaled(last_pose_.inverse() * pose, 1.0 / periods);
   velocity_measured_ = true;
   if (!enough_depth) {
@@ -188,14 +195,35 @@ void DenseTracker::forgetVelocity() {
   velocity_measured_ = false;
 }
 
-ReadoutMotion DenseTracker::readoutMotion() const {
-  ReadoutMotion motion = ReadoutMotion::Zero();
-  if (options_.readout <= 0) return motion;
-  const double share = options_.readout / frame_period_;
+ReadoutMotion DenseTracker::readoutRate() const {
+  ReadoutMotion rate = ReadoutMotion::Zero();
+  if (options_.readout <= 0 && !options_.estimate_readout) return rate;
   const Eigen::AngleAxisd turn(velocity_.linear());
-  motion.head<3>() = (share * turn.angle() * turn.axis()).cast<float>();
-  motion.tail<3>() = (share * velocity_.translation()).cast<float>();
-  return motion;
+  rate.head<3>() = (turn.angle() / frame_period_ * turn.axis()).cast<float>();
+  rate.tail<3>() = (velocity_.translation() / frame_period_).cast<float>();
+  return rate;
+}
+
+void DenseTracker::measureReadout() {
+  const double information = last_result_.readout_information;
+  if (!options_.estimate_readout || !velocity_measured_ || !(information > 0)) return;
+  const double measured = readout_ + last_result_.readout_step;
+  readout_weight_ += information;
+  readout_mean_ += (measured - readout_mean_) * information / readout_weight_;
+  readout_ = std::clamp(readout_mean_, 0.0, frame_period_);
+}
+
+std::string DenseTracker::report() const {
+  if (!options_.estimate_readout) return {};
+  // The configured value's share of the estimate: the rest is what alignments measured.
+  const double configured =
+      readout_weight_ > 0 ? options_.readout_prior_weight / readout_weight_ : 1.0;
+  char text[200];
+  std::snprintf(text, sizeof(text),
+                "rolling shutter readout %.1f ms (camera.readout: %.4f; the configured %.4f "
+                "weighs %.0f%% of it, what tracking measured the rest)",
+                readout_ * 1e3, readout_, options_.readout, 100.0 * configured);
+  return text;
 }
 
 bool DenseTracker::relocalise(const Frame& frame, Eigen::Isometry3d& pose) {

@@ -14,6 +14,11 @@ Keys trackingKeys(TrackingOptions& o) {
               "dense: Gauss-Newton steps per coarse level"),
       integer("tracking.finest_iterations", &o.finest_iterations, 1, 100,
               "dense: Gauss-Newton steps on the finest level"),
+      boolean("tracking.estimate_readout", &o.estimate_readout,
+              "dense: measure the rolling shutter's readout while tracking, from camera.readout"),
+      number("tracking.readout_prior_weight", &o.readout_prior_weight, 0, 1e12,
+             "dense: how much camera.readout counts against the readout alignments measure "
+             "(their readout information, 1/s^2)"),
       number("tracking.depth_weight", &o.depth_weight, 0, 100,
              "dense: weight of depth residuals against intensity residuals (0 = photometric only)"),
       choice("tracking.depth_noise", &o.depth_noise, {"quadratic", "constant"},

@@ -20,6 +20,9 @@ struct AlignmentReference {
   };
   std::vector<Level> levels;
   int valid_pixels = 0;  // at the finest level, before subsampling: the overlap denominator
+  // The keyframe's camera motion per second of readout when it was read (rotation vector, then
+  // translation), for estimating the readout: its points move by this times the readout.
+  ReadoutMotion readout_rate = ReadoutMotion::Zero();
 
   // Takes pixels with depth from levels finest..coarsest of `pyramid`. On the finest level,
   // pixels with an intensity gradient under min_gradient are taken every other row and column.
@@ -38,6 +41,11 @@ struct AlignmentResult {
   // information one aligned pixel gives about `motion` ([translation, rotation], left
   // increments), what a pose graph weighs this alignment by.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  // With a readout rate set (DenseAligner::setReadoutRate): the Gauss-Newton step of the
+  // readout time (s) at the final motion, and its information (the Hessian's Schur complement
+  // after the motion), 0 when the motion leaves the readout unobservable.
+  double readout_step = 0.0;
+  double readout_information = 0.0;
   bool finite = false;
 };
 
@@ -56,10 +64,12 @@ class DenseAligner {
   // has_z 0 and zeros in rz and jz. Columns are padded with zeros to a multiple of 8.
   struct Residuals {
     std::vector<float> ji[6], jz[6], ri, rz, has_z;
+    // Derivatives of ri and rz with respect to the readout time, when it is estimated.
+    std::vector<float> ai, az;
     std::size_t size = 0;
     void reset(std::size_t capacity);  // size 0, room for `capacity` points
     void padToLanes();                 // zeros up to the next multiple of 8 (size unchanged)
-    std::array<std::vector<float>*, 15> columns();  // every one of them
+    std::array<std::vector<float>*, 17> columns();  // every one of them
   };
 
   explicit DenseAligner(const TrackingOptions& options) : options_(options) {}
@@ -67,6 +77,10 @@ class DenseAligner {
                         const Eigen::Isometry3d& guess);
   // The current frame's motion during its readout, for the alignments that follow.
   void setReadoutMotion(const ReadoutMotion& readout) { readout_ = readout; }
+  // The current frame's camera motion per second of readout: when not zero, alignments also
+  // measure the readout time (AlignmentResult::readout_step), from both the frame's rows and
+  // the reference's (AlignmentReference::readout_rate).
+  void setReadoutRate(const ReadoutMotion& rate) { readout_rate_ = rate; }
 
  private:
   TrackingOptions options_;
@@ -75,6 +89,7 @@ class DenseAligner {
   Residuals residuals_;
   std::vector<float> abs_i_, abs_z_;
   ReadoutMotion readout_ = ReadoutMotion::Zero();
+  ReadoutMotion readout_rate_ = ReadoutMotion::Zero();
 };
 
 }  // namespace rgbdmap

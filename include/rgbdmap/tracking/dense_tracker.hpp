@@ -32,7 +32,11 @@ class DenseTracker : public PoseProvider {
   std::string describe() const override;
   TrackingState state() const override { return state_; }
 
+  std::string report() const override;
+
   std::uint64_t keyframes() const { return next_id_ - first_id_; }
+  // The rolling shutter's readout tracking works with (s): camera.readout, or what it measured.
+  double readout() const { return readout_; }
 
  private:
   struct Keyframe {
@@ -53,8 +57,12 @@ class DenseTracker : public PoseProvider {
   bool relocalise(const Frame& frame, Eigen::Isometry3d& pose);
   // No velocity known any more (the start, a loss, a relocalisation): predict no motion.
   void forgetVelocity();
-  // The camera's motion over a frame's readout (camera.readout), at the last velocity.
-  ReadoutMotion readoutMotion() const;
+  // The camera's motion per second, at the last velocity (zero before one is measured).
+  ReadoutMotion readoutRate() const;
+  // The camera's motion over a frame's readout (readout_, s), at the last velocity.
+  ReadoutMotion readoutMotion() const { return static_cast<float>(readout_) * readoutRate(); }
+  // Folds the last alignment's measurement of the readout into readout_.
+  void measureReadout();
   bool accept(Frame& frame, const Eigen::Isometry3d& pose, TrackingState state);
   bool lose(Frame& frame, const Eigen::Isometry3d& predicted);
 
@@ -71,6 +79,11 @@ class DenseTracker : public PoseProvider {
   Eigen::Isometry3d last_pose_ = Eigen::Isometry3d::Identity();  // last good pose
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();   // per frame, last good pair
   bool velocity_measured_ = false;  // velocity_ is from a tracked pair, not a reset
+  // The rolling shutter's readout (s): camera.readout, then, with tracking.estimate_readout,
+  // the information-weighted mean of what alignments measure, with the weight behind it.
+  double readout_;       // in [0, frame period]
+  double readout_mean_;  // unclamped, so that noise around 0 averages out
+  double readout_weight_;
   double last_timestamp_ = 0.0;
   double frame_period_ = 1.0 / 30.0;
   bool started_ = false;

@@ -30,6 +30,8 @@ class PoseProvider {
   virtual std::string describe() const = 0;
   // The outcome of the last estimate().
   virtual TrackingState state() const = 0;
+  // What tracking measured of the camera over the run, for the log; empty when nothing.
+  virtual std::string report() const { return {}; }
 };
 
 // The source's own poses (a dataset's ground truth, interpolated at the colour stamp).

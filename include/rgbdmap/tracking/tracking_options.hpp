@@ -23,6 +23,11 @@ struct TrackingOptions {
   // A rolling shutter's readout time (s; key camera.readout): the camera's motion over it, from
   // the last frame's velocity, is undone row by row. 0: a global shutter.
   double readout = 0.0;
+  // Measure the readout while tracking, starting from `readout`: each alignment of a moving
+  // camera says how much longer or shorter it fits best. readout_prior_weight: how much
+  // information the starting value counts for (in alignments' readout information, 1/s^2).
+  bool estimate_readout = true;
+  double readout_prior_weight = 1e7;
   int max_iterations = 12;    // Gauss-Newton steps per level (coarse levels)
   int finest_iterations = 6;  // on the finest level, where a step costs the most
   double depth_weight = 0.1;  // weight of a (normalised) depth residual vs an intensity one
