@@ -77,18 +77,12 @@ float robustSigma(std::vector<float>& values, float fallback) {
 // sqrt(1 + |gradient|^2 / knee^2): about knee / |gradient| where the image is steeper than knee.
 // With a rolling shutter (`readout` not zero), a point is looked up where the camera was when
 // the row it lands on was read (to first order: the motion over one readout is small).
-// With `rates` (the frame's and the reference's camera motion per second of readout), also the
-// residuals' derivatives with respect to the readout time (ai, az).
-struct ReadoutRates {
-  Eigen::Vector3f frame_w, frame_v, reference_w, reference_v;
-};
-
 RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
                                        const PyramidLevel& level, const Eigen::Matrix3f& R,
                                        const Eigen::Vector3f& t, bool quadratic_noise,
                                        float inv_knee2, const ReadoutMotion& readout,
-                                       const ReadoutRates* rates, Residuals& out,
-                                       std::vector<float>& abs_i, std::vector<float>& abs_z) {
+                                       Residuals& out, std::vector<float>& abs_i,
+                                       std::vector<float>& abs_z) {
   const bool rolling = !readout.isZero();
   const Eigen::Vector3f w = readout.head<3>(), dt = readout.tail<3>();
   const LevelCamera& c = level.camera;
@@ -101,9 +95,9 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
     Eigen::Vector3f p = R * q.head<3>() + t;
     if (p.z() <= 0.05f) continue;
     float iz = 1.0f / p.z();
-    const float row_share = (c.fy * p.y() * iz + c.cy) * inv_height - 0.5f;
     if (rolling) {
-      const Eigen::Vector3f shift = row_share * (w.cross(p) + dt);
+      const float s = (c.fy * p.y() * iz + c.cy) * inv_height - 0.5f;
+      const Eigen::Vector3f shift = s * (w.cross(p) + dt);
       p -= shift;
       iz *= 1.0f + shift.z() * iz;  // 1 / (z - dz) to first order: dz is a fraction of a mm
     }
@@ -133,16 +127,7 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
       out.rz[m] = 0.0f;
       out.has_z[m] = 0.0f;
     }
-    if (rates) {
-      // A longer readout moves the reference's point along its camera's motion (its row's share
-      // of it) and the lookup against the frame's.
-      const Eigen::Vector3f k = q.head<3>();
-      const float sk = (c.fy * k.y() / k.z() + c.cy) * inv_height - 0.5f;
-      const Eigen::Vector3f dp = R * (sk * (rates->reference_w.cross(k) + rates->reference_v)) -
-                                 row_share * (rates->frame_w.cross(p) + rates->frame_v);
-      out.ai[m] = out.ji[0][m] * dp.x() + out.ji[1][m] * dp.y() + out.ji[2][m] * dp.z();
-      out.az[m] = out.jz[0][m] * dp.x() + out.jz[1][m] * dp.y() + out.jz[2][m] * dp.z();
-    }
+    out.source[m] = static_cast<std::uint32_t>(n);
     if ((n & 3) == 0) abs_i.push_back(std::abs(out.ri[m]));
     ++m;
   }
@@ -245,19 +230,67 @@ RGBDMAP_VECTOR_CLONES void normalEquations(const Residuals& r, float inv_i, floa
     for (int j = 0; j < i; ++j) H(i, j) = H(j, i);
 }
 
-// The readout's row of the normal equations beside the motion's (normalEquations' weights):
-// h = sum of w a J, hh = sum of w a^2, g = sum of w a r, for the derivatives a (ai, az).
-void readoutRow(const Residuals& r, float inv_i, float inv_z, float k, float depth_weight,
-                Vector6d& h, double& hh, double& g) {
+// The residuals' derivatives with respect to the readout time (ai, az), at the motion (R, t)
+// they were computed at: a longer readout moves the reference's point along its camera's motion
+// (its row's share of it) and the lookup in the frame against the frame's. `frame` and
+// `reference`: each camera's motion per second (rotation vector, translation).
+RGBDMAP_VECTOR_CLONES void readoutDerivatives(const AlignmentReference::Points& points,
+                                              const LevelCamera& c, const Eigen::Matrix3f& R,
+                                              const Eigen::Vector3f& t, const ReadoutMotion& frame,
+                                              const ReadoutMotion& reference, Residuals& r) {
+  const Eigen::Vector3f fw = frame.head<3>(), fv = frame.tail<3>();
+  const Eigen::Vector3f rw = reference.head<3>(), rv = reference.tail<3>();
+  const float inv_height = 1.0f / static_cast<float>(c.height);
+  for (std::size_t m = 0; m < r.size; ++m) {
+    const Eigen::Vector3f q = points[r.source[m]].head<3>();
+    const Eigen::Vector3f p = R * q + t;
+    const float sq = (c.fy * q.y() / q.z() + c.cy) * inv_height - 0.5f;
+    const float sp = (c.fy * p.y() / p.z() + c.cy) * inv_height - 0.5f;
+    const Eigen::Vector3f dp = R * (sq * (rw.cross(q) + rv)) - sp * (fw.cross(p) + fv);
+    r.ai[m] = r.ji[0][m] * dp.x() + r.ji[1][m] * dp.y() + r.ji[2][m] * dp.z();
+    r.az[m] = r.jz[0][m] * dp.x() + r.jz[1][m] * dp.y() + r.jz[2][m] * dp.z();
+  }
+  r.padToLanes();
+}
+
+// The readout's row of the normal equations beside the motion's, weighted as normalEquations
+// weighs: h = sum of w a J, hh = sum of w a^2, g = sum of w a r, for the derivatives a (ai, az).
+// Summed 8 rows at a time in float within chunks of 512, in double across them.
+RGBDMAP_VECTOR_CLONES void readoutRow(const Residuals& r, float inv_i, float inv_z, float k,
+                                      float depth_weight, Vector6d& h, double& hh, double& g) {
+  constexpr std::size_t kChunk = 512;
   h.setZero();
   hh = g = 0;
-  const double ci = k * inv_i * inv_i, cz = depth_weight * k * inv_z * inv_z;
-  for (std::size_t m = 0; m < r.size; ++m) {
-    const double wi = ci / std::max(std::abs(r.ri[m] * inv_i), k);
-    const double wz = r.has_z[m] * cz / std::max(std::abs(r.rz[m] * inv_z), k);
-    for (int j = 0; j < 6; ++j) h(j) += wi * r.ai[m] * r.ji[j][m] + wz * r.az[m] * r.jz[j][m];
-    hh += wi * r.ai[m] * r.ai[m] + wz * r.az[m] * r.az[m];
-    g += wi * r.ai[m] * r.ri[m] + wz * r.az[m] * r.rz[m];
+  alignas(32) float wi[kChunk], wz[kChunk];
+  for (std::size_t begin = 0; begin < r.size; begin += kChunk) {
+    const std::size_t n = roundUpToLanes(std::min(r.size - begin, kChunk));
+    huberWeights(r.ri.data() + begin, nullptr, n, inv_i, k, 1.0f, wi);
+    huberWeights(r.rz.data() + begin, r.has_z.data() + begin, n, inv_z, k, depth_weight, wz);
+    Lanes sums[8] = {};
+    for (std::size_t m = 0; m < n; m += kLanes) {
+      Lanes w, a, c, wai, waz;
+      load(w, wi + m);
+      load(a, r.ai.data() + begin + m);
+      wai = w * a;
+      sums[6] += wai * a;
+      load(w, wz + m);
+      load(a, r.az.data() + begin + m);
+      waz = w * a;
+      sums[6] += waz * a;
+      for (int j = 0; j < 6; ++j) {
+        load(c, r.ji[j].data() + begin + m);
+        sums[j] += wai * c;
+        load(c, r.jz[j].data() + begin + m);
+        sums[j] += waz * c;
+      }
+      load(c, r.ri.data() + begin + m);
+      sums[7] += wai * c;
+      load(c, r.rz.data() + begin + m);
+      sums[7] += waz * c;
+    }
+    for (int j = 0; j < 6; ++j) h(j) += laneSum(sums[j]);
+    hh += laneSum(sums[6]);
+    g += laneSum(sums[7]);
   }
 }
 
@@ -272,6 +305,7 @@ void DenseAligner::Residuals::reset(std::size_t capacity) {
   const std::size_t padded = roundUpToLanes(capacity);
   for (std::vector<float>* column : columns())
     if (column->size() < padded) column->resize(padded);
+  if (source.size() < padded) source.resize(padded);
   size = 0;
 }
 
@@ -336,8 +370,6 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
   const float brightness_tolerance = static_cast<float>(options_.brightness_tolerance);
   float offset = 0.0f;
   const bool estimate_readout = !readout_rate_.isZero();
-  const ReadoutRates rates{readout_rate_.head<3>(), readout_rate_.tail<3>(),
-                           reference.readout_rate.head<3>(), reference.readout_rate.tail<3>()};
 
   for (int l = coarsest; l >= finest; --l) {
     const auto& points = reference.levels[static_cast<std::size_t>(l)].points;
@@ -346,14 +378,15 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
     std::size_t landed = 0;
     Matrix6d H = Matrix6d::Zero();
     Vector6d b = Vector6d::Zero();
+    Eigen::Matrix3f R;  // the motion the last residuals were computed at
+    Eigen::Vector3f t;
     for (int it = 0; it < iterations; ++it) {
-      const Eigen::Matrix3f R = motion.linear().cast<float>();
-      const Eigen::Vector3f t = motion.translation().cast<float>();
+      R = motion.linear().cast<float>();
+      t = motion.translation().cast<float>();
       abs_i.clear();
       abs_z.clear();
       residualsAt(points, level, R, t, quadratic_noise, l == finest ? 0.0f : coarse_inv_knee2,
-                  readout_, estimate_readout && l == finest ? &rates : nullptr, residuals, abs_i,
-                  abs_z);
+                  readout_, residuals, abs_i, abs_z);
       landed = residuals.size;
       if (landed < 12) break;
       // On the finest level only: while coarse levels bring the frame into place, a misalignment
@@ -380,6 +413,8 @@ AlignmentResult DenseAligner::align(const AlignmentReference& reference,
       if (estimate_readout && landed >= 12) {
         // Given the motion at its optimum (b is almost zero there), what the readout adds: the
         // readout's equation once the motion's is eliminated (Schur complement).
+        readoutDerivatives(points, level.camera, R, t, readout_rate_, reference.readout_rate,
+                           residuals);
         Vector6d h;
         double hh, g;
         readoutRow(residuals, 1.0f / sigma_i, 1.0f / sigma_z, k, depth_weight, h, hh, g);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "rgbdmap/tracking/image_pyramid.hpp"
@@ -66,6 +67,7 @@ class DenseAligner {
     std::vector<float> ji[6], jz[6], ri, rz, has_z;
     // Derivatives of ri and rz with respect to the readout time, when it is estimated.
     std::vector<float> ai, az;
+    std::vector<std::uint32_t> source;  // the reference point each row is of
     std::size_t size = 0;
     void reset(std::size_t capacity);  // size 0, room for `capacity` points
     void padToLanes();                 // zeros up to the next multiple of 8 (size unchanged)
