@@ -206,7 +206,9 @@ ReadoutMotion DenseTracker::readoutRate() const {
 
 void DenseTracker::measureReadout() {
   const double information = last_result_.readout_information;
-  if (!options_.estimate_readout || !velocity_measured_ || !(information > 0)) return;
+  if (!options_.estimate_readout || !velocity_measured_ || !(information > 0) ||
+      !std::isfinite(last_result_.readout_step))
+    return;
   const double measured = readout_ + last_result_.readout_step;
   readout_weight_ += information;
   readout_mean_ += (measured - readout_mean_) * information / readout_weight_;
