@@ -70,6 +70,13 @@ float robustSigma(std::vector<float>& values, float fallback) {
   return (1 - ay) * ((1 - ax) * s00 + ax * s01) + ay * ((1 - ax) * s10 + ax * s11);
 }
 
+// When the row a point at height y_over_z (y / z) lands on was read, in readouts after the middle
+// row (-1/2 .. 1/2; `inv_height`: 1 / the image's rows).
+[[gnu::always_inline]] inline float readoutShare(const LevelCamera& c, float inv_height,
+                                                 float y_over_z) {
+  return (c.fy * y_over_z + c.cy) * inv_height - 0.5f;
+}
+
 // The residuals of the reference's `points` (x, y, z, intensity) moved by (R, t) into `level`,
 // each with its Jacobian rows; every 4th point's absolute residuals go to abs_i and abs_z (for
 // the robust scales). With `quadratic_noise`, depth residuals and their rows are divided by z^2.
@@ -96,7 +103,7 @@ RGBDMAP_VECTOR_CLONES void residualsAt(const AlignmentReference::Points& points,
     if (p.z() <= 0.05f) continue;
     float iz = 1.0f / p.z();
     if (rolling) {
-      const float s = (c.fy * p.y() * iz + c.cy) * inv_height - 0.5f;
+      const float s = readoutShare(c, inv_height, p.y() * iz);
       const Eigen::Vector3f shift = s * (w.cross(p) + dt);
       p -= shift;
       iz *= 1.0f + shift.z() * iz;  // 1 / (z - dz) to first order: dz is a fraction of a mm
@@ -244,8 +251,8 @@ RGBDMAP_VECTOR_CLONES void readoutDerivatives(const AlignmentReference::Points& 
   for (std::size_t m = 0; m < r.size; ++m) {
     const Eigen::Vector3f q = points[r.source[m]].head<3>();
     const Eigen::Vector3f p = R * q + t;
-    const float sq = (c.fy * q.y() / q.z() + c.cy) * inv_height - 0.5f;
-    const float sp = (c.fy * p.y() / p.z() + c.cy) * inv_height - 0.5f;
+    const float sq = readoutShare(c, inv_height, q.y() / q.z());
+    const float sp = readoutShare(c, inv_height, p.y() / p.z());
     const Eigen::Vector3f dp = R * (sq * (rw.cross(q) + rv)) - sp * (fw.cross(p) + fv);
     r.ai[m] = r.ji[0][m] * dp.x() + r.ji[1][m] * dp.y() + r.ji[2][m] * dp.z();
     r.az[m] = r.jz[0][m] * dp.x() + r.jz[1][m] * dp.y() + r.jz[2][m] * dp.z();

@@ -196,8 +196,7 @@ void DenseTracker::forgetVelocity() {
 }
 
 ReadoutMotion DenseTracker::readoutRate() const {
-  ReadoutMotion rate = ReadoutMotion::Zero();
-  if (options_.readout <= 0 && !options_.estimate_readout) return rate;
+  ReadoutMotion rate;
   const Eigen::AngleAxisd turn(velocity_.linear());
   rate.head<3>() = (turn.angle() / frame_period_ * turn.axis()).cast<float>();
   rate.tail<3>() = (velocity_.translation() / frame_period_).cast<float>();
