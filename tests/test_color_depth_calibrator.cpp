@@ -40,24 +40,19 @@ Eigen::Isometry3d depthCamera(const Eigen::Vector3d& position, const Eigen::Vect
   return pose;
 }
 
-TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCaptures) {
+// Captures of the default room along its walls, where outlines lie at every depth (seen from the
+// room's centre, most are far, and a longer focal length looks like a depth camera nearer the
+// scene): colour through `lens`, depth from a camera of its own (`depth`, at `color_from_depth`).
+std::vector<CalibrationFrame> renderCaptures(const CameraIntrinsics& lens,
+                                             const CameraIntrinsics& depth,
+                                             const Eigen::Isometry3d& color_from_depth) {
 #if defined(__SANITIZE_THREAD__)
   // The renderer's OpenCV loops run on TBB's uninstrumented workers (as in `rgbdmap synth`);
   // the calibrator's own threads (a WorkerPool) are what this build checks.
   cv::setNumThreads(1);
 #endif
-  // A Kinect-like pair: depth 2.5 cm aside with a focal length of 580 px, turned by 0.9 deg;
-  // the colour lens 1% longer than the 525 px declared.
-  const Eigen::Isometry3d truth = depthCamera({0.025, 0.003, -0.002}, {0.3, -0.8, 0.2});
-  CameraIntrinsics color;  // declared: 640 x 480, f 525
-  CameraIntrinsics lens = color;
-  lens.fx = lens.fy = 525.0 * 1.01;
-  CameraIntrinsics depth = color;
-  depth.fx = depth.fy = 580.0;
   const SyntheticScene scene = SyntheticScene::defaultRoom();
   const SyntheticRenderer color_renderer(scene, lens), depth_renderer(scene, depth);
-  // Along the walls, where outlines lie at every depth (seen from the room's centre, most are
-  // far, and a longer focal length looks like a depth camera nearer the scene).
   SyntheticSequenceOptions options;
   options.path = "walk";
   const auto path = makeCameraPath(scene, options, options.loop_seconds);
@@ -69,9 +64,22 @@ TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCapture
     color_renderer.render(pose, unused, color_image, incidence, hits);
     cv::cvtColor(color_image, gray8, cv::COLOR_BGR2GRAY);
     gray8.convertTo(frame.gray, CV_32F);
-    depth_renderer.render(pose * truth, frame.depth, unused, incidence, hits);
+    depth_renderer.render(pose * color_from_depth, frame.depth, unused, incidence, hits);
     frames.push_back(frame);
   }
+  return frames;
+}
+
+TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCaptures) {
+  // A Kinect-like pair: depth 2.5 cm aside with a focal length of 580 px, turned by 0.9 deg;
+  // the colour lens 1% longer than the 525 px declared.
+  const Eigen::Isometry3d truth = depthCamera({0.025, 0.003, -0.002}, {0.3, -0.8, 0.2});
+  CameraIntrinsics color;  // declared: 640 x 480, f 525
+  CameraIntrinsics lens = color;
+  lens.fx = lens.fy = 525.0 * 1.01;
+  CameraIntrinsics depth = color;
+  depth.fx = depth.fy = 580.0;
+  std::vector<CalibrationFrame> frames = renderCaptures(lens, depth, truth);
   WorkerPool pool(2);
   const ColorDepthCalibrator calibrator(ColorDepthCalibrator::Config{}, color, depth);
   ColorDepthCalibration guess;  // registered, as declared
@@ -96,6 +104,31 @@ TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCapture
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("too few outlines"), std::string::npos) << e.what();
   }
+}
+
+// A depth camera whose intrinsics nobody gave (a user's raw Kinect streams, a dataset without
+// them): its focal length is found, the colour camera's kept. Started from the colour camera's
+// 525 px, the depth camera's 580 px put outlines 30 px off their edges at the image's sides.
+TEST(ColorDepthCalibrator, FindsTheDepthCamerasFocalLengthWhenOnlyTheColourCamerasIsKnown) {
+  const Eigen::Isometry3d truth = depthCamera({0.025, 0.003, -0.002}, {0.3, -0.8, 0.2});
+  CameraIntrinsics color;  // declared and exact: 640 x 480, f 525
+  CameraIntrinsics depth = color;
+  depth.fx = depth.fy = 580.0;
+  const std::vector<CalibrationFrame> frames = renderCaptures(color, depth, truth);
+  WorkerPool pool(2);
+  ColorDepthCalibrator::Config config;
+  config.estimate_depth_focal = true;
+  // Given the colour camera's intrinsics for the depth camera's, as calibrate does without keys.
+  const ColorDepthCalibrator calibrator(config, color, color);
+  const CalibrationReport report = calibrator.estimate(frames, ColorDepthCalibration{}, pool);
+  const ColorDepthCalibration& found = report.calibration;
+  EXPECT_EQ(found.fx, 525.0);
+  EXPECT_EQ(found.fy, 525.0);
+  std::cout << "depth focal length " << 525.0 * found.depth_focal_scale << " px (truth 580)\n";
+  EXPECT_LT(std::abs(525.0 * found.depth_focal_scale / 580.0 - 1.0), 0.005);
+  ColorDepthCalibration as_depth = found;  // the focal length bound on the depth camera's
+  as_depth.fx = as_depth.fy = 525.0 * found.depth_focal_scale;
+  expectNear(as_depth, truth, 580.0);
 }
 
 // Through the command line: a rendered unregistered orbit with sensor noise; the keys printed.

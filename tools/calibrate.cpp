@@ -1,5 +1,5 @@
-// `rgbdmap calibrate --source SRC`: the colour camera's focal length and where the depth camera
-// sits in it, for cameras whose depth is not registered to colour (raw Kinect streams,
+// `rgbdmap calibrate --source SRC`: the colour camera's focal length (or the depth camera's, when
+// its intrinsics are not given) and where the depth camera sits in it, for cameras whose depth is not registered to colour (raw Kinect streams,
 // 7-Scenes), found from a recording where objects stand before others; prints the keys to set.
 #include <chrono>
 #include <cmath>
@@ -77,6 +77,9 @@ int calibrate(const CalibrateOptions& o) {
   // Registered depth (no camera.depth_* keys: a check of a registered camera) shares the colour
   // lens; a depth camera of its own is an ideal pinhole, as DepthRegistration takes it.
   const CameraIntrinsics depth = camera.depthCamera();
+  // Without the depth camera's own intrinsics its focal length is what is unknown (taken from
+  // the colour camera's to start with); with them (a dataset's, a preset's), the colour's.
+  const bool depth_focal_unknown = !(camera.depth_fx > 0);
 
   const std::vector<CalibrationFrame> captures = readCaptures(*source, camera, o);
   if (captures.size() < 2)
@@ -94,6 +97,7 @@ int calibrate(const CalibrateOptions& o) {
   calibrator_config.min_depth = config.filter.min_depth;
   calibrator_config.max_depth = config.filter.max_depth;
   calibrator_config.estimate_depth_z = !o.fix_depth_z;
+  calibrator_config.estimate_depth_focal = depth_focal_unknown;
   const ColorDepthCalibrator calibrator(calibrator_config, camera, depth);
   CalibrationReport report;
   try {
@@ -111,8 +115,15 @@ int calibrate(const CalibrateOptions& o) {
       "the keys given, %.2f px (%zu) calibrated (%.1f s)\n",
       source->describe().c_str(), captures.size(), report.rms_before, report.edges_before,
       report.rms_after, report.edges_after, secondsSince(start));
-  std::printf("colour camera: fx %.2f, fy %.2f (given %.2f, %.2f; principal point kept)\n", c.fx,
-              c.fy, camera.fx, camera.fy);
+  const double depth_fx = depth.fx * c.depth_focal_scale, depth_fy = depth.fy * c.depth_focal_scale;
+  if (depth_focal_unknown)
+    std::printf(
+        "depth camera: fx %.2f, fy %.2f (no camera.depth_fx/fy given: started from the colour "
+        "camera's %.2f, %.2f, which are kept; principal point kept)\n",
+        depth_fx, depth_fy, camera.fx, camera.fy);
+  else
+    std::printf("colour camera: fx %.2f, fy %.2f (given %.2f, %.2f; principal point kept)\n",
+                c.fx, c.fy, camera.fx, camera.fy);
   std::printf("uncertainty: position %.1f mm, rotation %.3f deg, focal length %.2f%%\n",
               report.translation_sd * 1000, report.rotation_sd * 180 / M_PI, report.focal_sd * 100);
   std::printf("depth camera in the colour camera: %.4f %.4f %.4f m, rotation %.3f %.3f %.3f deg\n",
@@ -144,8 +155,8 @@ int calibrate(const CalibrateOptions& o) {
   // The keys, the depth camera's intrinsics included: once camera.fx changes, a depth_fx of 0
   // (the colour camera's) would follow it.
   const std::vector<std::pair<std::string, double>> keys = {
-      {"camera.fx", c.fx},           {"camera.fy", c.fy},           {"camera.depth_fx", depth.fx},
-      {"camera.depth_fy", depth.fy}, {"camera.depth_cx", depth.cx}, {"camera.depth_cy", depth.cy},
+      {"camera.fx", c.fx},           {"camera.fy", c.fy},           {"camera.depth_fx", depth_fx},
+      {"camera.depth_fy", depth_fy}, {"camera.depth_cx", depth.cx}, {"camera.depth_cy", depth.cy},
       {"camera.depth_x", t.x()},     {"camera.depth_y", t.y()},     {"camera.depth_z", t.z()},
       {"camera.depth_rx", rv.x()},   {"camera.depth_ry", rv.y()},   {"camera.depth_rz", rv.z()}};
   std::string sets;

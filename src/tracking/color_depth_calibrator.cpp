@@ -119,12 +119,16 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
   };
   pool.run(frames.size(), prepare);
 
+  const bool depth_focal = config_.estimate_depth_focal;
   std::vector<FrameSystem> systems(frames.size());
   // Matches every outline against the colour edges of its frame within `search_px`.
   auto match = [&](const ColorDepthCalibration& x, double search_px) {
     const double fx = x.fx, fy = x.fy, cx = color_.cx, cy = color_.cy;
     const Eigen::Matrix3f R = x.color_from_depth.linear().cast<float>();
     const Eigen::Vector3f t = x.color_from_depth.translation().cast<float>();
+    // A longer depth focal length puts the outlines nearer the view's centre.
+    const float lateral = static_cast<float>(1.0 / x.depth_focal_scale);
+    const Eigen::Vector3f scale(lateral, lateral, 1.0f);
     const float search = static_cast<float>(search_px);
     const float min_gradient = static_cast<float>(config_.min_gradient);
     const float unique = static_cast<float>(config_.unique);
@@ -132,8 +136,9 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
       FrameSystem system;
       const ColorGradient& image = gradients[f];
       for (const Outline& outline : edges[f]) {
-        const Eigen::Vector3f p = R * outline.point + t;
-        const Eigen::Vector3f q = R * outline.beyond + t;
+        const Eigen::Vector3f in_depth = outline.point.cwiseProduct(scale);
+        const Eigen::Vector3f p = R * in_depth + t;
+        const Eigen::Vector3f q = R * outline.beyond.cwiseProduct(scale) + t;
         if (p.z() < 0.1f || q.z() < 0.1f) continue;
         const Eigen::Vector2f u(static_cast<float>(fx * p.x() / p.z() + cx),
                                 static_cast<float>(fy * p.y() / p.z() + cy));
@@ -177,7 +182,11 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
         Vector7 J;
         J.head<3>() = dp;
         J.segment<3>(3) = pd.cross(dp);
-        J(6) = (n.x() * fx * p.x() + n.y() * fy * p.y()) / z;
+        if (depth_focal)  // the depth camera's point moves in by the log focal length's step
+          J(6) = dp.dot(R.cast<double>() *
+                        Eigen::Vector3d(-in_depth.x(), -in_depth.y(), 0.0));
+        else
+          J(6) = (n.x() * fx * p.x() + n.y() * fy * p.y()) / z;
         const double w = std::abs(gap) <= 1.0 ? 1.0 : 1.0 / std::abs(gap);  // Huber, 1 px
         system.H.noalias() += w * J * J.transpose();
         system.b += w * gap * J;
@@ -223,17 +232,23 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
         const Vector7 step = -system.H.ldlt().solve(system.b);
         if (!step.allFinite()) throw std::runtime_error("the estimate diverged");
         current.color_from_depth = expSE3(step.head<6>()) * current.color_from_depth;
-        current.fx *= std::exp(step(6));
-        current.fy *= std::exp(step(6));
+        if (depth_focal) {
+          current.depth_focal_scale *= std::exp(step(6));
+        } else {
+          current.fx *= std::exp(step(6));
+          current.fy *= std::exp(step(6));
+        }
         if (!config_.estimate_depth_z)
           current.color_from_depth.translation().z() = guess.color_from_depth.translation().z();
         // Far from any camera's: matched to texture rather than outlines, not a calibration.
         const Eigen::Isometry3d moved = guess.color_from_depth.inverse() * current.color_from_depth;
-        if (std::abs(std::log(current.fx / guess.fx)) > 0.2 || moved.translation().norm() > 0.1 ||
+        const double focal = depth_focal ? current.depth_focal_scale / guess.depth_focal_scale
+                                         : current.fx / guess.fx;
+        if (std::abs(std::log(focal)) > 0.2 || moved.translation().norm() > 0.1 ||
             Eigen::AngleAxisd(moved.linear()).angle() > 10.0 * M_PI / 180.0)
           throw std::runtime_error(
-              "the estimate ran off (focal length " + std::to_string(current.fx) +
-              " px, depth camera " + std::to_string(moved.translation().norm() * 1000.0) +
+              "the estimate ran off (focal length " + std::to_string(focal) +
+              " times the guess, depth camera " + std::to_string(moved.translation().norm() * 1000.0) +
               " mm from the guess) on " + std::to_string(system.count) +
               " outline points: film objects standing before others from nearer and from more "
               "sides, or give a guess nearer the truth (camera.depth_* keys)");
@@ -249,24 +264,38 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
   // size (a guess of "registered" for lenses 2.5 cm apart puts outlines 10 px and more off their
   // edges, out of the search's reach: on a rendered floor it converged elsewhere), the start that
   // brings most outlines within a pixel of an edge. Of the two ends, the one that does.
-  ColorDepthCalibration beside = guess;
-  std::size_t most_close = match(guess, config_.search_px / 2).close;
-  for (double dx = -config_.start_offset_m; dx <= config_.start_offset_m + 1e-9;
-       dx += config_.start_step_m) {
-    ColorDepthCalibration start = guess;
-    start.color_from_depth.translation() += Eigen::Vector3d(dx, 0.0, 0.0);
-    const std::size_t close = match(start, config_.search_px / 2).close;
-    if (close > most_close) {
-      most_close = close;
-      beside = start;
+  // With the depth camera's focal length unknown, its guess may be 10% off as well (outlines
+  // 30 px off their edges at the image's sides, where the nearest edge is often the wrong one):
+  // then each focal length across that range is a start too, with its best offset, and each is
+  // refined (which start brings most outlines within a pixel tells little that far off).
+  std::vector<ColorDepthCalibration> starts = {guess};
+  const double focal_range = depth_focal ? config_.start_focal_range : 0.0;
+  const double focal_step = std::max(config_.start_focal_step, 1e-3);
+  for (double df = -focal_range; df <= focal_range + 1e-9; df += focal_step) {
+    ColorDepthCalibration focal_start = guess;
+    focal_start.depth_focal_scale *= 1.0 + df;
+    ColorDepthCalibration beside = focal_start;
+    std::size_t most_close = match(focal_start, config_.search_px / 2).close;
+    for (double dx = -config_.start_offset_m; dx <= config_.start_offset_m + 1e-9;
+         dx += config_.start_step_m) {
+      ColorDepthCalibration start = focal_start;
+      start.color_from_depth.translation() += Eigen::Vector3d(dx, 0.0, 0.0);
+      const std::size_t close = match(start, config_.search_px / 2).close;
+      if (close > most_close) {
+        most_close = close;
+        beside = start;
+      }
     }
+    const bool at_guess = beside.depth_focal_scale == guess.depth_focal_scale &&
+                          beside.color_from_depth.isApprox(guess.color_from_depth);
+    if (!at_guess) starts.push_back(beside);
   }
   // Each end judged, and reported, by its matches within the last search range.
   const double final_search = 2.0;
   std::optional<ColorDepthCalibration> current;
   FrameSystem at_estimate;
   std::string failure;
-  for (const ColorDepthCalibration& start : {guess, beside}) {
+  for (const ColorDepthCalibration& start : starts) {
     try {
       const ColorDepthCalibration end = refine(start);
       const FrameSystem matched = match(end, final_search);
@@ -277,7 +306,6 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
     } catch (const std::runtime_error& e) {
       if (failure.empty()) failure = e.what();
     }
-    if (beside.color_from_depth.isApprox(guess.color_from_depth)) break;
   }
   if (!current) throw std::runtime_error(failure);
 

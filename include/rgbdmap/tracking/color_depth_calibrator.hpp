@@ -17,12 +17,15 @@ struct CalibrationFrame {
   cv::Mat depth;
 };
 
-// What the calibration estimates: the colour camera's focal lengths (scaled together, their
-// declared ratio kept; its principal point stays the declared one: a shift of it and a small
-// turn of the depth camera look the same) and the depth camera's pose in the colour camera's
-// frame.
+// What the calibration estimates: the colour camera's focal lengths or the depth camera's
+// (scaled together, their declared ratio kept; the principal points stay the declared ones: a
+// shift of one and a small turn of the depth camera look the same) and the depth camera's pose
+// in the colour camera's frame.
 struct ColorDepthCalibration {
   double fx = 525.0, fy = 525.0;
+  // The depth camera's focal lengths over those it was given (ColorDepthCalibrator::Config::
+  // estimate_depth_focal; else 1).
+  double depth_focal_scale = 1.0;
   Eigen::Isometry3d color_from_depth = Eigen::Isometry3d::Identity();
 };
 
@@ -33,7 +36,7 @@ struct CalibrationReport {
   std::size_t edges_before = 0, edges_after = 0;
   double rms_before = 0.0, rms_after = 0.0;
   // How well the captures determine the estimate: standard deviations of the depth camera's
-  // position (m) and rotation (rad), and of the focal length (a fraction of it).
+  // position (m) and rotation (rad), and of the focal length estimated (a fraction of it).
   double translation_sd = 0.0, rotation_sd = 0.0, focal_sd = 0.0;
 };
 
@@ -63,6 +66,14 @@ class ColorDepthCalibrator {
     // Whether the depth camera's offset along the view is estimated or kept at the guess's: on
     // real recordings the outlines trade it against the focal length (docs/cameras.md).
     bool estimate_depth_z = true;
+    // Which focal length is estimated: the colour camera's (false: the depth camera's
+    // intrinsics are known, e.g. a dataset's) or the depth camera's (true: its intrinsics are
+    // not known and the colour camera's are). The outlines tell only their ratio apart from
+    // the baseline, so one of them is kept. The depth camera's guess (the colour camera's) may
+    // then be 10% off, as a Kinect's 580 px are from 525: starts are tried across that range.
+    bool estimate_depth_focal = false;
+    double start_focal_range = 0.15;  // +- this share of the guess, in steps of start_focal_step
+    double start_focal_step = 0.025;
   };
 
   // `color`: the colour camera's declared intrinsics (its principal point is kept); `depth`:
