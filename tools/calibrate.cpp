@@ -27,7 +27,10 @@ struct CalibrateOptions {
   int frames = 60;  // captures to use
   int every = 5;    // one capture taken every this many frames
   int threads = 0;
-  bool fix_depth_z = false;  // keep camera.depth_z as given
+  // Keep camera.depth_z as given, or estimate it; by default kept only when the depth camera's
+  // focal length is what is estimated (the two trade against each other, docs/cameras.md).
+  bool fix_depth_z = false;
+  bool free_depth_z = false;
 };
 
 // Every `every`-th capture, up to `frames` of them, as the calibrator takes them: grey colour
@@ -96,7 +99,8 @@ int calibrate(const CalibrateOptions& o) {
   ColorDepthCalibrator::Config calibrator_config;
   calibrator_config.min_depth = config.filter.min_depth;
   calibrator_config.max_depth = config.filter.max_depth;
-  calibrator_config.estimate_depth_z = !o.fix_depth_z;
+  const bool fix_depth_z = o.fix_depth_z || (depth_focal_unknown && !o.free_depth_z);
+  calibrator_config.estimate_depth_z = !fix_depth_z;
   calibrator_config.estimate_depth_focal = depth_focal_unknown;
   const ColorDepthCalibrator calibrator(calibrator_config, camera, depth);
   CalibrationReport report;
@@ -126,8 +130,9 @@ int calibrate(const CalibrateOptions& o) {
                 c.fx, c.fy, camera.fx, camera.fy);
   std::printf("uncertainty: position %.1f mm, rotation %.3f deg, focal length %.2f%%\n",
               report.translation_sd * 1000, report.rotation_sd * 180 / M_PI, report.focal_sd * 100);
-  std::printf("depth camera in the colour camera: %.4f %.4f %.4f m, rotation %.3f %.3f %.3f deg\n",
-              t.x(), t.y(), t.z(), rv.x() * 180 / M_PI, rv.y() * 180 / M_PI, rv.z() * 180 / M_PI);
+  std::printf("depth camera in the colour camera: %.4f %.4f %.4f m, rotation %.3f %.3f %.3f deg%s\n",
+              t.x(), t.y(), t.z(), rv.x() * 180 / M_PI, rv.y() * 180 / M_PI, rv.z() * 180 / M_PI,
+              fix_depth_z ? " (along the view kept at camera.depth_z)" : "");
   // Measured on rendered rooms: where these (optimistic) spreads were above 1 mm or 0.1%, the
   // estimate was off by centimetres and percent; below, by 2 mm and 0.2% at most.
   if (report.translation_sd > 0.001 || report.focal_sd > 0.001)
@@ -145,7 +150,7 @@ int calibrate(const CalibrateOptions& o) {
                  "%g, %g), or whether %s's depth is registered to colour already\n",
                  t.norm() * 100, rotation.angle() * 180 / M_PI, depth.fx, depth.fy, depth.cx,
                  depth.cy, source->describe().c_str());
-  if (!o.fix_depth_z && std::abs(t.z() - camera.depth_z) > 0.01)
+  if (!fix_depth_z && std::abs(t.z() - camera.depth_z) > 0.01)
     std::fprintf(stderr,
                  "warning: the depth camera came out %.1f cm along the view from camera.depth_z: "
                  "Kinect-class cameras hold both lenses on one board, and on real recordings "
@@ -182,8 +187,9 @@ int calibrate(const CalibrateOptions& o) {
 void addCalibrateCommand(CLI::App& app, Command& selected) {
   auto* cmd = app.add_subcommand(
       "calibrate",
-      "find the colour camera's focal length and the depth camera's pose in it (depth not "
-      "registered to colour) from a recording; prints the camera keys to map it with");
+      "find the depth camera's pose in the colour camera (depth not registered to colour) and "
+      "the colour camera's focal length, or the depth camera's when camera.depth_fx/fy are not "
+      "given, from a recording; prints the camera keys to map it with");
   auto o = std::make_shared<CalibrateOptions>();
   cmd->add_option("-s,--source", o->source, "tum:DIR | openni2 | openni2:FILE.oni | ...")
       ->required();
@@ -198,9 +204,14 @@ void addCalibrateCommand(CLI::App& app, Command& selected) {
   cmd->add_option("--every", o->every, "take one capture every this many frames")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
-  cmd->add_flag("--fix-depth-z", o->fix_depth_z,
-                "keep the depth camera's offset along the view at camera.depth_z (cameras on one "
-                "board: see docs/cameras.md)");
+  auto* fix = cmd->add_flag("--fix-depth-z", o->fix_depth_z,
+                            "keep the depth camera's offset along the view at camera.depth_z "
+                            "(cameras on one board: see docs/cameras.md); the default when "
+                            "camera.depth_fx/fy are not given");
+  cmd->add_flag("--free-depth-z", o->free_depth_z,
+                "estimate the depth camera's offset along the view (the default when "
+                "camera.depth_fx/fy are given)")
+      ->excludes(fix);
   cmd->add_option("--threads", o->threads, "threads (0: every core)")
       ->capture_default_str()
       ->check(CLI::Range(0, 256));
