@@ -24,6 +24,7 @@ set(RGBDMAP_LONG_TESTS
   # An unregistered orbit rendered and calibrated through the command line (13 s; the
   # calibrator on rendered captures stays)
   ColorDepthCalibrator.CalibrateFindsTheKeysOfAnUnregisteredSequence
+  ColorDepthCalibrator.CalibrateWithoutDepthKeysFindsTheDepthCamerasFocalLength
   # Real sequences end to end, and runs repeated to compare them (95-160 s under ThreadSanitizer;
   # PipelineReplay.Fr1XyzEndToEnd stays)
   PipelineReplay.Fr1RpyHead100EndToEnd

@@ -70,6 +70,21 @@ std::vector<CalibrationFrame> renderCaptures(const CameraIntrinsics& lens,
   return frames;
 }
 
+// Sets the keys calibrate printed ("map with: --set k=v ..."), as a user would; false when none.
+bool printedKeys(const std::string& output, Config& config) {
+  const std::string marker = "map with:";
+  const auto line = output.find(marker);
+  if (line == std::string::npos) return false;
+  std::istringstream keys(
+      output.substr(line + marker.size(), output.find('\n', line) - line - marker.size()));
+  std::string word, assignment;
+  while (keys >> word >> assignment) {
+    if (word != "--set") return false;
+    config.setAll({assignment}, "calibrate's output");
+  }
+  return true;
+}
+
 TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCaptures) {
   // A Kinect-like pair: depth 2.5 cm aside with a focal length of 580 px, turned by 0.9 deg;
   // the colour lens 1% longer than the 525 px declared.
@@ -148,17 +163,8 @@ TEST(ColorDepthCalibrator, CalibrateFindsTheKeysOfAnUnregisteredSequence) {
   std::cout << output;
   EXPECT_EQ(output.find("warning"), std::string::npos) << output;
   // The keys as printed, set as a user would set them.
-  const std::string marker = "map with:";
-  const auto line = output.find(marker);
-  ASSERT_NE(line, std::string::npos) << output;
-  std::istringstream keys(
-      output.substr(line + marker.size(), output.find('\n', line) - line - marker.size()));
   Config config;
-  std::string word, assignment;
-  while (keys >> word >> assignment) {
-    ASSERT_EQ(word, "--set");
-    config.setAll({assignment}, "calibrate's output");
-  }
+  ASSERT_TRUE(printedKeys(output, config)) << output;
   const CameraOptions& c = config.camera;
   ColorDepthCalibration found;
   found.fx = c.fx;
@@ -178,6 +184,33 @@ TEST(ColorDepthCalibrator, CalibrateFindsTheKeysOfAnUnregisteredSequence) {
             0)
       << output;
   EXPECT_NE(output.find("--set camera.depth_z=0.003 "), std::string::npos) << output;
+}
+
+// Through the command line with the default configuration (no depth keys): the depth camera's
+// focal length found, the colour camera's kept, the offset along the view kept at 0.
+TEST(ColorDepthCalibrator, CalibrateWithoutDepthKeysFindsTheDepthCamerasFocalLength) {
+  const std::string sequence = test::sharedSynthetic(
+      "orbit_100_unregistered_585",
+      " --frames 100 --fps 10 --seed 6 --depth-camera 0.025,-0.003,0,0.3,0.5,-0.2"
+      " --depth-focal 585");
+  std::string output;
+  ASSERT_EQ(test::run(test::binary() + " calibrate --source tum:" + sequence + " --every 1",
+                      &output),
+            0)
+      << output;
+  std::cout << output;
+  EXPECT_NE(output.find("depth camera: fx"), std::string::npos) << output;
+  Config config;
+  ASSERT_TRUE(printedKeys(output, config)) << output;
+  const CameraOptions& c = config.camera;
+  EXPECT_EQ(c.fx, 525.0);
+  EXPECT_EQ(c.fy, 525.0);
+  EXPECT_EQ(c.depth_z, 0.0);
+  ColorDepthCalibration found;
+  found.fx = c.depth_fx;
+  found.fy = c.depth_fy;
+  found.color_from_depth = c.colorFromDepth();
+  expectNear(found, depthCamera({0.025, -0.003, 0.0}, {0.3, 0.5, -0.2}), 585.0);
 }
 
 }  // namespace
