@@ -194,9 +194,8 @@ TEST(ColorDepthCalibrator, CalibrateWithoutDepthKeysFindsTheDepthCamerasFocalLen
       " --frames 100 --fps 10 --seed 6 --depth-camera 0.025,-0.003,0,0.3,0.5,-0.2"
       " --depth-focal 585");
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " calibrate --source tum:" + sequence + " --every 1",
-                      &output),
-            0)
+  ASSERT_EQ(
+      test::run(test::binary() + " calibrate --source tum:" + sequence + " --every 1", &output), 0)
       << output;
   std::cout << output;
   EXPECT_NE(output.find("depth camera: fx"), std::string::npos) << output;

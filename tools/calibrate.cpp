@@ -1,6 +1,7 @@
 // `rgbdmap calibrate --source SRC`: the colour camera's focal length (or the depth camera's, when
-// its intrinsics are not given) and where the depth camera sits in it, for cameras whose depth is not registered to colour (raw Kinect streams,
-// 7-Scenes), found from a recording where objects stand before others; prints the keys to set.
+// its intrinsics are not given) and where the depth camera sits in it, for cameras whose depth is
+// not registered to colour (raw Kinect streams, 7-Scenes), found from a recording where objects
+// stand before others; prints the keys to set.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -126,13 +127,14 @@ int calibrate(const CalibrateOptions& o) {
         "camera's %.2f, %.2f, which are kept; principal point kept)\n",
         depth_fx, depth_fy, camera.fx, camera.fy);
   else
-    std::printf("colour camera: fx %.2f, fy %.2f (given %.2f, %.2f; principal point kept)\n",
-                c.fx, c.fy, camera.fx, camera.fy);
+    std::printf("colour camera: fx %.2f, fy %.2f (given %.2f, %.2f; principal point kept)\n", c.fx,
+                c.fy, camera.fx, camera.fy);
   std::printf("uncertainty: position %.1f mm, rotation %.3f deg, focal length %.2f%%\n",
               report.translation_sd * 1000, report.rotation_sd * 180 / M_PI, report.focal_sd * 100);
-  std::printf("depth camera in the colour camera: %.4f %.4f %.4f m, rotation %.3f %.3f %.3f deg%s\n",
-              t.x(), t.y(), t.z(), rv.x() * 180 / M_PI, rv.y() * 180 / M_PI, rv.z() * 180 / M_PI,
-              fix_depth_z ? " (along the view kept at camera.depth_z)" : "");
+  std::printf(
+      "depth camera in the colour camera: %.4f %.4f %.4f m, rotation %.3f %.3f %.3f deg%s\n", t.x(),
+      t.y(), t.z(), rv.x() * 180 / M_PI, rv.y() * 180 / M_PI, rv.z() * 180 / M_PI,
+      fix_depth_z ? " (along the view kept at camera.depth_z)" : "");
   // Measured on rendered rooms: where these (optimistic) spreads were above 1 mm or 0.1%, the
   // estimate was off by centimetres and percent; below, by 2 mm and 0.2% at most.
   if (report.translation_sd > 0.001 || report.focal_sd > 0.001)

@@ -183,8 +183,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
         J.head<3>() = dp;
         J.segment<3>(3) = pd.cross(dp);
         if (depth_focal)  // the depth camera's point moves in by the log focal length's step
-          J(6) = dp.dot(R.cast<double>() *
-                        Eigen::Vector3d(-in_depth.x(), -in_depth.y(), 0.0));
+          J(6) = dp.dot(R.cast<double>() * Eigen::Vector3d(-in_depth.x(), -in_depth.y(), 0.0));
         else
           J(6) = (n.x() * fx * p.x() + n.y() * fy * p.y()) / z;
         const double w = std::abs(gap) <= 1.0 ? 1.0 : 1.0 / std::abs(gap);  // Huber, 1 px
@@ -248,8 +247,9 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
             Eigen::AngleAxisd(moved.linear()).angle() > 10.0 * M_PI / 180.0)
           throw std::runtime_error(
               "the estimate ran off (focal length " + std::to_string(focal) +
-              " times the guess, depth camera " + std::to_string(moved.translation().norm() * 1000.0) +
-              " mm from the guess) on " + std::to_string(system.count) +
+              " times the guess, depth camera " +
+              std::to_string(moved.translation().norm() * 1000.0) + " mm from the guess) on " +
+              std::to_string(system.count) +
               " outline points: film objects standing before others from nearer and from more "
               "sides, or give a guess nearer the truth (camera.depth_* keys)");
         if (step.head<3>().norm() < 1e-5 && step.segment<3>(3).norm() < 1e-5 &&
@@ -263,7 +263,7 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
   // From the guess, and from the depth camera moved across the view by up to the baseline's own
   // size (a guess of "registered" for lenses 2.5 cm apart puts outlines 10 px and more off their
   // edges, out of the search's reach: on a rendered floor it converged elsewhere), the start that
-  // brings most outlines within a pixel of an edge. Of the two ends, the one that does.
+  // brings most outlines within a pixel of an edge. Of the ends, the one that does.
   // With the depth camera's focal length unknown, its guess may be 10% off as well (outlines
   // 30 px off their edges at the image's sides, where the nearest edge is often the wrong one):
   // then each focal length across that range is a start too, with its best offset, and each is
