@@ -56,8 +56,9 @@ TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$root/tests/t
 [ "${RGBDMAP_KEEP_BUILDS:-}" = 1 ] || rm -rf build-tsan
 
 section "AddressSanitizer + UBSan: the tests not threaded, but the long ones"
-# At -O1: the ASan build from scratch took 9.6 min against some 18 at -O2 (the largest unity
-# file 72 s against 102), its tests 666 s against 580 (2026-12-07, 2 cores, nothing beside).
+# At -O1: the ASan build from scratch took 9.6 min (18-20 at -O2 when last measured so,
+# 2026-12-02; the largest unity file 72 s against 102), its tests 666 s against 580 (2026-12-07,
+# 2 cores, nothing beside).
 build build-asan asan_tests "${sanitized[@]}" -DRGBDMAP_SANITIZE=address \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
 export UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1"
