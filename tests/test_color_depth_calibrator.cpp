@@ -85,6 +85,16 @@ bool printedKeys(const std::string& output, Config& config) {
   return true;
 }
 
+// The calibration the keys hold, with the focal length that was estimated (`fx`, `fy`: the
+// colour camera's or the depth camera's).
+ColorDepthCalibration keysAsCalibration(const CameraOptions& c, double fx, double fy) {
+  ColorDepthCalibration found;
+  found.fx = fx;
+  found.fy = fy;
+  found.color_from_depth = c.colorFromDepth();
+  return found;
+}
+
 TEST(ColorDepthCalibrator, FindsTheDepthCameraAndTheFocalLengthOfRenderedCaptures) {
   // A Kinect-like pair: depth 2.5 cm aside with a focal length of 580 px, turned by 0.9 deg;
   // the colour lens 1% longer than the 525 px declared.
@@ -166,11 +176,8 @@ TEST(ColorDepthCalibrator, CalibrateFindsTheKeysOfAnUnregisteredSequence) {
   Config config;
   ASSERT_TRUE(printedKeys(output, config)) << output;
   const CameraOptions& c = config.camera;
-  ColorDepthCalibration found;
-  found.fx = c.fx;
-  found.fy = c.fy;
-  found.color_from_depth = c.colorFromDepth();
-  expectNear(found, depthCamera({-0.02, 0.005, 0.003}, {-0.5, 0.6, -0.3}), 525.0 * 0.988);
+  expectNear(keysAsCalibration(c, c.fx, c.fy),
+             depthCamera({-0.02, 0.005, 0.003}, {-0.5, 0.6, -0.3}), 525.0 * 0.988);
   EXPECT_EQ(c.depth_fx, 575.0);
   EXPECT_EQ(c.depth_fy, 575.0);
   // The config file holds the same camera.
@@ -205,11 +212,8 @@ TEST(ColorDepthCalibrator, CalibrateWithoutDepthKeysFindsTheDepthCamerasFocalLen
   EXPECT_EQ(c.fx, 525.0);
   EXPECT_EQ(c.fy, 525.0);
   EXPECT_EQ(c.depth_z, 0.0);
-  ColorDepthCalibration found;
-  found.fx = c.depth_fx;
-  found.fy = c.depth_fy;
-  found.color_from_depth = c.colorFromDepth();
-  expectNear(found, depthCamera({0.025, -0.003, 0.0}, {0.3, 0.5, -0.2}), 585.0);
+  expectNear(keysAsCalibration(c, c.depth_fx, c.depth_fy),
+             depthCamera({0.025, -0.003, 0.0}, {0.3, 0.5, -0.2}), 585.0);
 }
 
 }  // namespace

@@ -269,11 +269,13 @@ CalibrationReport ColorDepthCalibrator::estimate(const std::vector<CalibrationFr
   // then each focal length across that range is a start too, with its best offset, and each is
   // refined (which start brings most outlines within a pixel tells little that far off).
   std::vector<ColorDepthCalibration> starts = {guess};
-  const double focal_range = depth_focal ? config_.start_focal_range : 0.0;
   const double focal_step = std::max(config_.start_focal_step, 1e-3);
-  for (double df = -focal_range; df <= focal_range + 1e-9; df += focal_step) {
+  // Counted in whole steps, so that the middle one is the guess's focal length exactly.
+  const int focal_steps =
+      depth_focal ? static_cast<int>(std::floor(config_.start_focal_range / focal_step + 1e-9)) : 0;
+  for (int i = -focal_steps; i <= focal_steps; ++i) {
     ColorDepthCalibration focal_start = guess;
-    focal_start.depth_focal_scale *= 1.0 + df;
+    focal_start.depth_focal_scale *= 1.0 + i * focal_step;
     ColorDepthCalibration beside = focal_start;
     std::size_t most_close = match(focal_start, config_.search_px / 2).close;
     for (double dx = -config_.start_offset_m; dx <= config_.start_offset_m + 1e-9;
