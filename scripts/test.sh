@@ -42,8 +42,11 @@ ctest --test-dir build --output-on-failure -j "$jobs" --timeout 900
 [ "${1:-}" = "--quick" ] && exit 0
 
 # The sanitizer runs read the synthetic sequences the release run rendered instead of rendering
-# them again, 5-10 times slower (tests/test_support.hpp, sharedSynthetic).
+# them again, 5-10 times slower (tests/test_support.hpp, sharedSynthetic), and the maps its
+# program made for the tests that read a saved map (tests/session_runs.hpp, sharedMap: fr1/rpy
+# mapped under ThreadSanitizer took 70 s in each of the session stream's tests).
 export RGBDMAP_TEST_SYNTHETIC_DIR="$root/build/tests/tmp/synthetic"
+export RGBDMAP_TEST_MAPPER="$root/build/rgbdmap"
 
 section "ThreadSanitizer: threaded tests"
 # No ROS here: its tests stop on reports inside uninstrumented roscpp (docs/testing.md).

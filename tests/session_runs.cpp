@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -19,9 +20,12 @@ namespace rgbdmap::test {
 
 namespace fs = std::filesystem;
 
-void mapTo(const std::string& sequence, const std::string& map) {
-  std::string output;
-  ASSERT_EQ(run(binary() + " --source tum:" + sequence + " --out " + map +
+namespace {
+
+// Maps as mapTo() says; `output` gets what the program printed.
+void mapWith(const std::string& program, const std::string& sequence, const std::string& map,
+             std::string& output) {
+  ASSERT_EQ(run(program + " --source tum:" + sequence + " --out " + map +
                     " --rate max --no-render --viewer none --set pose.source=odometry",
                 &output),
             0)
@@ -29,13 +33,46 @@ void mapTo(const std::string& sequence, const std::string& map) {
   ASSERT_TRUE(fs::is_directory(sessionPathOf(map))) << output;
 }
 
+}  // namespace
+
+void mapTo(const std::string& sequence, const std::string& map) {
+  std::string output;
+  mapWith(binary(), sequence, map, output);
+}
+
+std::string sharedMap(const std::string& name, const std::string& sequence) {
+  const char* mapper = std::getenv("RGBDMAP_TEST_MAPPER");
+  const std::string program = mapper && *mapper ? std::string(mapper) : binary();
+  const std::string build =
+      std::to_string(fs::last_write_time(program).time_since_epoch().count()) + "-" +
+      std::to_string(fs::file_size(program));
+  return writeOnce(sharedDir() + "/maps/" + name + "." + build,
+                   [&](const std::string& folder) {
+                     std::string output;
+                     mapWith(program, sequence, folder + "/map.pcd", output);
+                     std::ofstream(folder + "/map_log.txt") << output;
+                   }) +
+         "/map";
+}
+
+std::string copyMap(const std::string& prefix, const std::string& dir, const std::string& name) {
+  const fs::path from = fs::path(prefix).parent_path();
+  const std::string stem = fs::path(prefix).filename().string();
+  for (const fs::directory_entry& entry : fs::directory_iterator(from)) {
+    const std::string file = entry.path().filename().string();
+    if (file.rfind(stem, 0) != 0) continue;
+    fs::copy(entry.path(), fs::path(dir) / (name + file.substr(stem.size())),
+             fs::copy_options::recursive);
+  }
+  return dir + "/" + name;
+}
+
 const Session& mappedSession(const std::string& tum_name) {
   static std::map<std::string, Session> sessions;
   const auto found = sessions.find(tum_name);
   if (found != sessions.end()) return found->second;
-  const std::string dir = processDir("mapped." + tum_name);
-  mapTo(tumDir(tum_name), dir + "/map.pcd");
-  return sessions.emplace(tum_name, readSession(dir + "/map.session")).first->second;
+  const std::string map = sharedMap(tum_name, tumDir(tum_name));
+  return sessions.emplace(tum_name, readSession(map + ".session")).first->second;
 }
 
 namespace {
@@ -199,7 +236,10 @@ Eigen::Isometry3d frameInWorld(const std::string& keyframes, const std::string& 
 
 std::string scoreOf(const std::string& map, const std::string& scene,
                     const std::string& trajectory) {
-  const std::string json = map + ".score.json";
+  // Not beside the map: a shared one (sharedMap()) is scored by several processes at once.
+  static const std::string scores = processDir("scores");
+  static int scored = 0;
+  const std::string json = scores + "/" + std::to_string(scored++) + ".json";
   std::string output;
   EXPECT_EQ(run(binary() + " evaluate map " + map + " --scene " + scene + " --trajectory " +
                     trajectory + " --json " + json,

@@ -19,8 +19,20 @@ namespace rgbdmap::test {
 // `map`, MAP.session and the trajectories beside it.
 void mapTo(const std::string& sequence, const std::string& map);
 
-// The session of `sequence` (a shared TUM folder's name) mapped by mapTo(), once per test process
-// (CTest runs each test in a process of its own, in parallel: each maps into a folder of its own).
+// `sequence` mapped as mapTo() does, once, into a folder shared by every test and process that
+// asks for it by the same name (sharedDir()/maps); returns the map's path without extension
+// (PREFIX.pcd, PREFIX.session, PREFIX_keyframes.txt..., and what the program printed in
+// PREFIX_log.txt). Tests read it and never write beside it
+// (copyMap() first). The mapping program is $RGBDMAP_TEST_MAPPER when set: scripts/test.sh sets
+// the release build's, so the sanitizer runs take the release run's maps (their tests judge what
+// is done with a map; mapping runs under the sanitizers in tests of its own). The folder is named
+// after that program's build, so a rebuilt program maps again.
+std::string sharedMap(const std::string& name, const std::string& sequence);
+// A copy of the files of map `prefix` (sharedMap()) in `dir`, named `name` instead of "map";
+// returns its prefix, dir/name.
+std::string copyMap(const std::string& prefix, const std::string& dir, const std::string& name);
+
+// The session of a shared TUM folder (its name) in sharedMap().
 const Session& mappedSession(const std::string& tum_name);
 // mappedSession() of fr1/rpy's first 100 frames (kRpy).
 inline const Session& rpySession() { return mappedSession(kRpy); }

@@ -24,14 +24,14 @@ TEST(Localisation, RealFramesOfAnotherSequenceArePosedInTheSavedDesksFrame) {
   // fr1/xyz looks at the desk fr1/rpy was mapped from; both have the motion capture's poses in
   // one frame, so the saved keyframes and the localised frames are scored in one alignment.
   const std::string dir = test::freshDir();
-  test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
-  const std::string map_before = test::digest(dir + "/map.pcd");
-  const std::string session_before = test::digest(dir + "/map.session");
+  const std::string map = test::sharedMap(kRpy, test::tumDir(kRpy));
+  const std::string map_before = test::digest(map + ".pcd");
+  const std::string session_before = test::digest(map + ".session");
   const test::SessionRun run =
-      test::localise(test::tumDir(kXyz), dir + "/map.session", dir + "/localised");
+      test::localise(test::tumDir(kXyz), map + ".session", dir + "/localised");
   ASSERT_EQ(run.code, 0) << run.log;
   ASSERT_EQ(run.trajectory.size(), 32u) << run.log;  // fr1/xyz's 37 frames, 32 associated
-  const Trajectory saved = Trajectory::load(dir + "/map_keyframes.txt");
+  const Trajectory saved = Trajectory::load(map + "_keyframes.txt");
   const Trajectory saved_truth = Trajectory::load(test::tumDir(kRpy) + "/groundtruth.txt");
   const Trajectory truth =
       test::merged(saved_truth, Trajectory::load(test::tumDir(kXyz) + "/groundtruth.txt"));
@@ -49,16 +49,16 @@ TEST(Localisation, RealFramesOfAnotherSequenceArePosedInTheSavedDesksFrame) {
   EXPECT_GT(test::jsonNumber(run.stats, "keyframes_placed"), 0);
   // Nothing mapped, nothing of the saved run's changed.
   EXPECT_FALSE(fs::exists(dir + "/localised.pcd"));
-  EXPECT_EQ(test::digest(dir + "/map.pcd"), map_before);
-  EXPECT_EQ(test::digest(dir + "/map.session"), session_before);
+  EXPECT_EQ(test::digest(map + ".pcd"), map_before);
+  EXPECT_EQ(test::digest(map + ".session"), session_before);
 }
 
 TEST(Localisation, ASavedMapNeverRecognisedIsSaidAndFails) {
   // fr1/rpy's desk, and frames of the synthetic room it has never seen.
   const std::string dir = test::freshDir();
-  test::mapTo(test::tumDir(kRpy), dir + "/map.pcd");
+  const std::string map = test::sharedMap(kRpy, test::tumDir(kRpy));
   const test::SessionRun run = test::localise(test::sharedSynthetic("orbit_40", " --frames 40"),
-                                              dir + "/map.session", dir + "/localised");
+                                              map + ".session", dir + "/localised");
   EXPECT_EQ(run.code, 1) << run.log;
   EXPECT_NE(run.log.find("the saved map was never recognised"), std::string::npos) << run.log;
   EXPECT_GT(test::jsonNumber(run.stats, "keyframes_looked_for"), 0) << run.stats;
@@ -68,7 +68,8 @@ TEST(Localisation, ASavedMapNeverRecognisedIsSaidAndFails) {
 
 TEST(Localisation, RefusesToWriteBesideTheSavedMapOrToMap) {
   const std::string dir = test::freshDir();
-  test::mapTo(test::tumDir(kXyz), dir + "/map.pcd");
+  // A copy: a refusal that failed would write beside it.
+  test::copyMap(test::sharedMap(kXyz, test::tumDir(kXyz)), dir, "map");
   const std::string before = test::digest(dir + "/map_trajectory.txt");
   const std::string cli = test::binary() + " --source tum:" + test::tumDir(kXyz) +
                           " --no-render --viewer none --localise " + dir;

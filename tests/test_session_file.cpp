@@ -13,6 +13,7 @@
 #include "rgbdmap/base/error.hpp"
 #include "rgbdmap/capture/tum_sequence.hpp"
 #include "rgbdmap/sessions/session_file.hpp"
+#include "session_runs.hpp"
 #include "test_support.hpp"
 
 namespace rgbdmap {
@@ -22,23 +23,11 @@ namespace fs = std::filesystem;
 
 using test::kRpy;
 
-// Maps fr1/rpy's 100 frames with odometry and loop closure (the default for a camera), once.
-const std::string& mappedRun() {
-  static const std::string dir = [] {
-    // A folder of this process's own: CTest runs each test in its own process, in parallel, and
-    // each maps once (a shared folder was emptied by one while another read it). --rate max:
-    // at a camera's pace a busy sanitizer build drops frames and keeps fewer keyframes.
-    const std::string d = test::processDir("SessionFile.run");
-    std::string output;
-    const int code =
-        test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + d +
-                      "/map.pcd --no-render --viewer none --rate max --set pose.source=odometry",
-                  &output);
-    EXPECT_EQ(code, 0) << output;
-    std::ofstream(d + "/log.txt") << output;
-    return d;
-  }();
-  return dir;
+// The folder of fr1/rpy's 100 frames mapped with odometry and loop closure (the default for a
+// camera) into map.pcd, map.session...: shared by the tests and processes (test::sharedMap), read
+// only.
+std::string mappedRun() {
+  return fs::path(test::sharedMap(kRpy, test::tumDir(kRpy))).parent_path().string();
 }
 
 std::size_t lines(const std::string& path) {
@@ -68,8 +57,8 @@ std::string refusal(const std::string& path) {
 
 TEST(SessionFile, HoldsTheRunsGraphPlacesAndKeyframeImages) {
   const std::string dir = mappedRun();
-  ASSERT_TRUE(fs::is_directory(dir + "/map.session")) << test::readFile(dir + "/log.txt");
-  EXPECT_NE(test::readFile(dir + "/log.txt").find("session: "), std::string::npos);
+  ASSERT_TRUE(fs::is_directory(dir + "/map.session")) << test::readFile(dir + "/map_log.txt");
+  EXPECT_NE(test::readFile(dir + "/map_log.txt").find("session: "), std::string::npos);
   const Session session = readSession(dir + "/map.session");
   // Every fused keyframe kept (100 frames are within the budget), as the keyframe file says.
   EXPECT_EQ(session.keyframes.size(), lines(dir + "/map_keyframes.txt"));
@@ -375,8 +364,10 @@ TEST(SessionFile, ItsConfigurationWithTheFormerUndistortKeysStillLoads) {
 
 TEST(SessionFile, NotSavedWhenTurnedOffOrWithoutLoopClosure) {
   const std::string dir = test::freshDir();
+  // 20 frames, a few keyframes: a session would be written of them.
+  const std::string frames = test::sequenceSlice(test::tumDir(kRpy), 0, 20, dir + "/rpy20");
   std::string output;
-  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + frames + " --out " + dir +
                           "/off.pcd --no-render --viewer none --set pose.source=odometry " +
                           "--set checkpoint.session=false",
                       &output),
@@ -384,7 +375,7 @@ TEST(SessionFile, NotSavedWhenTurnedOffOrWithoutLoopClosure) {
       << output;
   EXPECT_FALSE(fs::exists(dir + "/off.session"));
   // Ground-truth poses: no loop closure, nothing a session is made of; the log says so.
-  ASSERT_EQ(test::run(test::binary() + " --source tum:" + test::tumDir(kRpy) + " --out " + dir +
+  ASSERT_EQ(test::run(test::binary() + " --source tum:" + frames + " --out " + dir +
                           "/truth.pcd --no-render --viewer none",
                       &output),
             0)

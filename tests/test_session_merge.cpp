@@ -22,11 +22,12 @@ using test::kXyz;
 
 TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
   const std::string dir = test::freshDir();
-  test::mapTo(test::tumDir(kRpy), dir + "/rpy.pcd");
-  test::mapTo(test::tumDir(kXyz), dir + "/xyz.pcd");
-  test::mapTo(test::sharedSynthetic("orbit_40", " --frames 40"), dir + "/room.pcd");
-  const std::vector<std::string> sessions = {dir + "/rpy.session", dir + "/room.session",
-                                             dir + "/xyz.session"};
+  const std::string rpy_map = test::sharedMap(kRpy, test::tumDir(kRpy));
+  const std::string xyz_map = test::sharedMap(kXyz, test::tumDir(kXyz));
+  const std::string room_map =
+      test::sharedMap("orbit_40", test::sharedSynthetic("orbit_40", " --frames 40"));
+  const std::vector<std::string> sessions = {rpy_map + ".session", room_map + ".session",
+                                             xyz_map + ".session"};
   const test::MergeRun merge = test::mergeSessions(sessions, dir + "/merged.pcd");
   test::expectAllButOneJoined(merge, sessions, 1);
   ASSERT_TRUE(merge.transforms[2]) << merge.log;
@@ -35,12 +36,12 @@ TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
   // Both sequences' motion capture shares one frame: fr1/xyz's keyframes moved by the transform
   // merge found score with fr1/rpy's in one alignment as well as fr1/rpy's alone.
   std::vector<StampedPose> moved;
-  const Trajectory xyz_keyframes = Trajectory::load(dir + "/xyz_keyframes.txt");
+  const Trajectory xyz_keyframes = Trajectory::load(xyz_map + "_keyframes.txt");
   for (StampedPose p : xyz_keyframes.poses()) {
     p.pose = xyz * p.pose;
     moved.push_back(p);
   }
-  const Trajectory rpy = Trajectory::load(dir + "/rpy_keyframes.txt");
+  const Trajectory rpy = Trajectory::load(rpy_map + "_keyframes.txt");
   const Trajectory rpy_truth = Trajectory::load(test::tumDir(kRpy) + "/groundtruth.txt");
   const double alone = absoluteTrajectoryError(rpy, rpy_truth).translation.rmse;
   const double together =
@@ -54,7 +55,7 @@ TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
   EXPECT_LT(together, 0.035);
 
   // The merged map has both runs' keyframes.
-  EXPECT_GT(test::loadMap(dir + "/merged.pcd").size(), test::loadMap(dir + "/rpy.pcd").size());
+  EXPECT_GT(test::loadMap(dir + "/merged.pcd").size(), test::loadMap(rpy_map + ".pcd").size());
 
   // One trajectory beside the merged map, at the merged graph's poses: the graph's keyframes and
   // every frame both runs tracked (the room's left out), scored in one alignment.
@@ -62,10 +63,10 @@ TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
       test::merged(rpy_truth, Trajectory::load(test::tumDir(kXyz) + "/groundtruth.txt"));
   const Trajectory keyframes = Trajectory::load(dir + "/merged_keyframes.txt");
   const Trajectory frames = Trajectory::load(dir + "/merged_trajectory.txt");
-  EXPECT_EQ(frames.size(), Trajectory::load(dir + "/rpy_trajectory.txt").size() +
-                               Trajectory::load(dir + "/xyz_trajectory.txt").size());
-  EXPECT_EQ(keyframes.size(), readSession(dir + "/rpy.session").graph.keyframes.size() +
-                                  readSession(dir + "/xyz.session").graph.keyframes.size());
+  EXPECT_EQ(frames.size(), Trajectory::load(rpy_map + "_trajectory.txt").size() +
+                               Trajectory::load(xyz_map + "_trajectory.txt").size());
+  EXPECT_EQ(keyframes.size(), readSession(rpy_map + ".session").graph.keyframes.size() +
+                                  readSession(xyz_map + ".session").graph.keyframes.size());
   const double graph = absoluteTrajectoryError(keyframes, truth).translation.rmse;
   const double every_frame = absoluteTrajectoryError(frames, truth).translation.rmse;
   std::cout << "the merged graph's " << keyframes.size() << " keyframes: ATE " << graph * 100
@@ -76,13 +77,12 @@ TEST(SessionMerge, TwoSequencesOfOneDeskJoinAndASyntheticRoomIsLeftOut) {
 
 TEST(SessionMerge, OneSessionOrABrokenOneIsRefused) {
   const std::string dir = test::freshDir();
-  test::mapTo(test::tumDir(kXyz), dir + "/c.pcd");
+  const std::string c = test::sharedMap(kXyz, test::tumDir(kXyz));
   std::string output;
-  EXPECT_EQ(
-      test::run(test::binary() + " merge " + dir + "/c.session --out " + dir + "/m.pcd", &output),
-      2);
+  EXPECT_EQ(test::run(test::binary() + " merge " + c + ".session --out " + dir + "/m.pcd", &output),
+            2);
   EXPECT_NE(output.find("give two sessions or more"), std::string::npos) << output;
-  EXPECT_EQ(test::run(test::binary() + " merge " + dir + "/c.session " + dir +
+  EXPECT_EQ(test::run(test::binary() + " merge " + c + ".session " + dir +
                           "/missing.session --out " + dir + "/m.pcd",
                       &output),
             2);

@@ -34,15 +34,15 @@ class RoomSessions : public ::testing::Test {
     first_ = test::sharedSynthetic("walk_lap_seed1", kFirstWalk);
     second_ =
         test::sequenceTail(test::sharedSynthetic("walk_lap_seed2", kSecondWalk), 180, dir_ + "/b");
-    test::mapTo(first_, dir_ + "/a.pcd");
+    a_ = test::sharedMap("walk_lap_seed1", first_);
   }
-  std::string dir_, first_, second_;
+  std::string dir_, first_, second_, a_;  // a_: the first walk's map (its path but extension)
 };
 
 TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
-  const std::string map_before = test::digest(dir_ + "/a.pcd");
-  const std::string session_before = test::digest(dir_ + "/a.session");
-  const test::SessionRun run = test::localise(second_, dir_ + "/a.session", dir_ + "/localised");
+  const std::string map_before = test::digest(a_ + ".pcd");
+  const std::string session_before = test::digest(a_ + ".session");
+  const test::SessionRun run = test::localise(second_, a_ + ".session", dir_ + "/localised");
   ASSERT_EQ(run.code, 0) << run.log;
   EXPECT_NE(run.log.find("localisation: placed in the saved map at keyframe"), std::string::npos)
       << run.log;
@@ -53,7 +53,7 @@ TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
   // Against the truth, in the frame the first run's keyframes align to theirs: one alignment,
   // made without the localised frames.
   const Eigen::Isometry3d saved_to_world =
-      test::frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt");
+      test::frameInWorld(a_ + "_keyframes.txt", first_ + "/groundtruth.txt");
   const Trajectory truth = Trajectory::load(second_ + "/groundtruth.txt");
   std::vector<double> errors;
   for (const StampedPose& p : run.trajectory.poses()) {
@@ -70,8 +70,8 @@ TEST_F(RoomSessions, ASecondWalkIsLocalisedInTheFirstsMapWhichStaysAsItWas) {
   // Nothing mapped, nothing of the saved run's changed.
   EXPECT_FALSE(fs::exists(dir_ + "/localised.pcd"));
   EXPECT_FALSE(fs::exists(dir_ + "/localised.session"));
-  EXPECT_EQ(test::digest(dir_ + "/a.pcd"), map_before);
-  EXPECT_EQ(test::digest(dir_ + "/a.session"), session_before);
+  EXPECT_EQ(test::digest(a_ + ".pcd"), map_before);
+  EXPECT_EQ(test::digest(a_ + ".session"), session_before);
 }
 
 // A continued session's keyframes, the saved run's (ids below `saved`) or the new one's, at the
@@ -93,16 +93,16 @@ Trajectory shifted(const Trajectory& t, double shift) {
 }
 
 TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
-  const std::string map_before = test::digest(dir_ + "/a.pcd");
-  const std::size_t saved = readSession(dir_ + "/a.session").graph.keyframes.size();
-  const test::SessionRun run = test::continueFrom(second_, dir_ + "/a.session", dir_ + "/b");
+  const std::string map_before = test::digest(a_ + ".pcd");
+  const std::size_t saved = readSession(a_ + ".session").graph.keyframes.size();
+  const test::SessionRun run = test::continueFrom(second_, a_ + ".session", dir_ + "/b");
   ASSERT_EQ(run.code, 0) << run.log;
   EXPECT_NE(run.log.find("continuing: keyframe"), std::string::npos) << run.log;
   // The saved map is recognised within a few frames of the start (it starts on ground the
   // first walk saw).
   const double unplaced = test::jsonNumber(run.stats, "frames_unplaced");
   EXPECT_LE(unplaced, 30) << run.log;
-  EXPECT_EQ(test::digest(dir_ + "/a.pcd"), map_before);
+  EXPECT_EQ(test::digest(a_ + ".pcd"), map_before);
 
   // Both runs' keyframes in the continued session's one graph, scored against the truth in one
   // alignment (the second run's clock shifted: the two walks share their timestamps).
@@ -136,7 +136,7 @@ TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
   test::mapTo(second_, dir_ + "/b_alone.pcd");
   const std::size_t points = test::loadMap(dir_ + "/b.pcd").size();
   const std::size_t merged =
-      test::mergedPoints(dir_ + "/a.session", dir_ + "/b_alone.session", dir_ + "/merged.pcd");
+      test::mergedPoints(a_ + ".session", dir_ + "/b_alone.session", dir_ + "/merged.pcd");
   std::cout << "continued map: precision " << precision << ", recall " << recall << " at 1 cm; "
             << points << " points, merged offline " << merged << "\n";
   EXPECT_GE(precision, 0.995);
@@ -147,7 +147,7 @@ TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
 TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
   test::mapTo(second_, dir_ + "/b.pcd");
   test::mapTo(test::tumDir(test::kXyz), dir_ + "/c.pcd");  // a real desk
-  const std::vector<std::string> sessions = {dir_ + "/a.session", dir_ + "/b.session",
+  const std::vector<std::string> sessions = {a_ + ".session", dir_ + "/b.session",
                                              dir_ + "/c.session"};
   const test::MergeRun merge = test::mergeSessions(sessions, dir_ + "/merged.pcd");
   test::expectAllButOneJoined(merge, sessions, 2);
@@ -156,7 +156,7 @@ TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
 
   // B's frame in A's against the truth: both runs' frames located in the room.
   const Eigen::Isometry3d truth =
-      test::frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
+      test::frameInWorld(a_ + "_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
       test::frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
   const Eigen::Isometry3d error = truth.inverse() * b;
   const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
@@ -166,12 +166,12 @@ TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
   EXPECT_LT(degrees, 1.0);
 
   // One map: as precise as A's own (B placed a little off would leave a second layer).
-  const double alone = test::precisionOf(dir_ + "/a.pcd", first_, dir_ + "/a_keyframes.txt");
-  const double merged = test::precisionOf(dir_ + "/merged.pcd", first_, dir_ + "/a_keyframes.txt");
+  const double alone = test::precisionOf(a_ + ".pcd", first_, a_ + "_keyframes.txt");
+  const double merged = test::precisionOf(dir_ + "/merged.pcd", first_, a_ + "_keyframes.txt");
   std::cout << "precision at 1 cm: merged " << merged << ", the first run alone " << alone << "\n";
   EXPECT_GE(merged, alone - 0.005);
   EXPECT_GE(merged, 0.99);
-  EXPECT_GT(test::loadMap(dir_ + "/merged.pcd").size(), test::loadMap(dir_ + "/a.pcd").size());
+  EXPECT_GT(test::loadMap(dir_ + "/merged.pcd").size(), test::loadMap(a_ + ".pcd").size());
 }
 
 TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
@@ -180,7 +180,7 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   // agreement of two or more).
   test::mapTo(second_, dir_ + "/b.pcd");
   test::mapTo(test::tumDir(test::kXyz), dir_ + "/c.pcd");  // a real desk
-  const Session a = test::streamed(readSession(dir_ + "/a.session"));
+  const Session a = test::streamed(readSession(a_ + ".session"));
   const Session b = test::streamed(readSession(dir_ + "/b.session"));
   const Session c = test::streamed(readSession(dir_ + "/c.session"));
   ASSERT_TRUE(a.keyframes.empty() && b.keyframes.empty());
@@ -192,7 +192,7 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   EXPECT_EQ(placements[2].linked_to, 0);
   placements.erase(placements.begin() + 1);
   const Eigen::Isometry3d truth =
-      test::frameInWorld(dir_ + "/a_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
+      test::frameInWorld(a_ + "_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
       test::frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
   const Eigen::Isometry3d error = truth.inverse() * placements[1].transform;
   const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
@@ -208,7 +208,7 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   // above, which compared every place of B with every place of A, for a fraction of the
   // comparisons.
   FleetMerger fleet({"/a", "/b"}, settings);
-  test::send(fleet, 0, readSession(dir_ + "/a.session"), 1, "/a/x");
+  test::send(fleet, 0, readSession(a_ + ".session"), 1, "/a/x");
   for (const std::string& record : test::streamOf(readSession(dir_ + "/b.session"), 1)) {
     fleet.receive(1, record, "/b/x");
     fleet.merge();

@@ -239,14 +239,16 @@ std::string writeOnce(const std::string& folder,
   return folder;
 }
 
+std::string sharedDir() {
+  const char* shared = std::getenv("RGBDMAP_TEST_SYNTHETIC_DIR");
+  return shared && *shared ? std::string(shared) : std::string(RGBDMAP_TEST_TMP) + "/synthetic";
+}
+
 std::string sharedSynthetic(const std::string& name, const std::string& synth_options) {
   // scripts/test.sh points the sanitizer builds at the release build's sequences: rendering them
   // again under a sanitizer tests nothing new (the renderer has tests of its own) and took most
   // of a sanitized test's time.
-  const char* shared = std::getenv("RGBDMAP_TEST_SYNTHETIC_DIR");
-  const std::string parent =
-      shared && *shared ? std::string(shared) : std::string(RGBDMAP_TEST_TMP) + "/synthetic";
-  return writeOnce(parent + "/" + name, [&](const std::string& folder) {
+  return writeOnce(sharedDir() + "/" + name, [&](const std::string& folder) {
     std::string output;
     // synth writes into a folder of its own.
     std::filesystem::remove_all(folder);

@@ -67,9 +67,11 @@ double jsonNumber(const std::string& json, const std::string& key);
 // returns without a fatal failure) and shared by every test and process that asks for it.
 std::string writeOnce(const std::string& folder,
                       const std::function<void(const std::string&)>& write);
-// A `rgbdmap synth` sequence written once into <build>/tests/tmp/synthetic/<name> (or
-// $RGBDMAP_TEST_SYNTHETIC_DIR/<name>) and shared by the tests (and processes) that ask for it by
-// the same name and options.
+// Where what the tests write once and share goes: <build>/tests/tmp/synthetic, or
+// $RGBDMAP_TEST_SYNTHETIC_DIR (scripts/test.sh points the sanitizer runs at the release run's).
+std::string sharedDir();
+// A `rgbdmap synth` sequence written once into sharedDir()/<name> and shared by the tests (and
+// processes) that ask for it by the same name and options.
 std::string sharedSynthetic(const std::string& name, const std::string& synth_options);
 // Copies a TUM folder's lists and links its image folders, so a test can corrupt the copy.
 std::string copySequence(const std::string& source, const std::string& target);
