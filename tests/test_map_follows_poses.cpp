@@ -285,14 +285,14 @@ TEST(KeptKeyframes, ASpaceWalkedOnceBeyondTheBudgetIsKeptOnDiskAndStaysInTheMap)
     ASSERT_EQ((*bounded)[i].getVector3fMap(), (*unbounded)[i].getVector3fMap()) << i;
 }
 
-// A loop that moves part of the map fuses again only that part: a lap of 72 views round the room,
+// A loop that moves part of the map fuses again only that part: a lap of 36 views round the room,
 // which a first loop moves whole (a whole pass), and whose first twelfth a second loop then moves
 // by 4 mm. The second pass fuses the cells those views see, before and after, from the keyframes
 // that see them (not the whole lap), and gives the map a whole pass gives, voxel for voxel; so
 // does a map with most of its blocks on disk (map.memory).
 TEST(MapFollowsPoses, ALoopThatMovesPartOfTheMapFusesOnlyThatPartAgain) {
   Config config;
-  const std::vector<Frame> lap = lapViews(config, 72);
+  const std::vector<Frame> lap = lapViews(config, 36);
   auto mapLap = [&](double region_share, double memory_mb, RunStats& stats) {
     config.refusion.region_share = region_share;
     config.map.memory = memory_mb;
