@@ -133,10 +133,10 @@ TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
       << output;
   const double precision = test::jsonNumber(test::readFile(score), "precision");
   const double recall = test::jsonNumber(test::readFile(score), "recall");
-  test::mapTo(second_, dir_ + "/b_alone.pcd");
+  const std::string b_alone = test::sharedMap("walk_lap_seed2_second_half", second_);
   const std::size_t points = test::loadMap(dir_ + "/b.pcd").size();
   const std::size_t merged =
-      test::mergedPoints(a_ + ".session", dir_ + "/b_alone.session", dir_ + "/merged.pcd");
+      test::mergedPoints(a_ + ".session", b_alone + ".session", dir_ + "/merged.pcd");
   std::cout << "continued map: precision " << precision << ", recall " << recall << " at 1 cm; "
             << points << " points, merged offline " << merged << "\n";
   EXPECT_GE(precision, 0.995);
@@ -145,10 +145,10 @@ TEST_F(RoomSessions, ASecondWalkContinuesTheFirstsMapAsOneMap) {
 }
 
 TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
-  test::mapTo(second_, dir_ + "/b.pcd");
-  test::mapTo(test::tumDir(test::kXyz), dir_ + "/c.pcd");  // a real desk
-  const std::vector<std::string> sessions = {a_ + ".session", dir_ + "/b.session",
-                                             dir_ + "/c.session"};
+  const std::string b_map = test::sharedMap("walk_lap_seed2_second_half", second_);
+  const std::string c_map = test::sharedMap(test::kXyz, test::tumDir(test::kXyz));  // a real desk
+  const std::vector<std::string> sessions = {a_ + ".session", b_map + ".session",
+                                             c_map + ".session"};
   const test::MergeRun merge = test::mergeSessions(sessions, dir_ + "/merged.pcd");
   test::expectAllButOneJoined(merge, sessions, 2);
   ASSERT_TRUE(merge.transforms[1]) << merge.log;
@@ -157,7 +157,7 @@ TEST_F(RoomSessions, TwoWalksMergeInTheFirstsFrameAndARunElsewhereIsLeftOut) {
   // B's frame in A's against the truth: both runs' frames located in the room.
   const Eigen::Isometry3d truth =
       test::frameInWorld(a_ + "_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
-      test::frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
+      test::frameInWorld(b_map + "_keyframes.txt", second_ + "/groundtruth.txt");
   const Eigen::Isometry3d error = truth.inverse() * b;
   const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
   std::cout << "B's frame in A's: " << error.translation().norm() * 100 << " cm and " << degrees
@@ -178,11 +178,11 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   // A fleet's merger has no images: each robot's places (ORB features, packed dense reference)
   // must place it (PlaceMatcher: PnP, dense alignment to the view drawn from the reference,
   // agreement of two or more).
-  test::mapTo(second_, dir_ + "/b.pcd");
-  test::mapTo(test::tumDir(test::kXyz), dir_ + "/c.pcd");  // a real desk
+  const std::string b_map = test::sharedMap("walk_lap_seed2_second_half", second_);
+  const std::string c_map = test::sharedMap(test::kXyz, test::tumDir(test::kXyz));  // a real desk
   const Session a = test::streamed(readSession(a_ + ".session"));
-  const Session b = test::streamed(readSession(dir_ + "/b.session"));
-  const Session c = test::streamed(readSession(dir_ + "/c.session"));
+  const Session b = test::streamed(readSession(b_map + ".session"));
+  const Session c = test::streamed(readSession(c_map + ".session"));
   ASSERT_TRUE(a.keyframes.empty() && b.keyframes.empty());
   std::vector<SessionMerger::Placement> placements;
   Config settings;
@@ -193,7 +193,7 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   placements.erase(placements.begin() + 1);
   const Eigen::Isometry3d truth =
       test::frameInWorld(a_ + "_keyframes.txt", first_ + "/groundtruth.txt").inverse() *
-      test::frameInWorld(dir_ + "/b_keyframes.txt", second_ + "/groundtruth.txt");
+      test::frameInWorld(b_map + "_keyframes.txt", second_ + "/groundtruth.txt");
   const Eigen::Isometry3d error = truth.inverse() * placements[1].transform;
   const double degrees = Eigen::AngleAxisd(error.linear()).angle() * 57.29577951308232;
   std::cout << "robot B placed by " << placements[1].links
@@ -209,7 +209,7 @@ TEST_F(RoomSessions, TwoRobotsStreamsArePlacedByTheirPlacesAlone) {
   // comparisons.
   FleetMerger fleet({"/a", "/b"}, settings);
   test::send(fleet, 0, readSession(a_ + ".session"), 1, "/a/x");
-  for (const std::string& record : test::streamOf(readSession(dir_ + "/b.session"), 1)) {
+  for (const std::string& record : test::streamOf(readSession(b_map + ".session"), 1)) {
     fleet.receive(1, record, "/b/x");
     fleet.merge();
   }
