@@ -150,13 +150,13 @@ TEST(FreeSpace, AnObjectThatWentAwayIsCarved) {
         lookAt(Eigen::Vector3d(sway(rng), sway(rng), 1.1 + sway(rng)), Eigen::Vector3d(0, 4, 1.1));
     tsdf.integrate(render(c, pose, scene, rng), uniformColour(c), pose, map);
   };
-  for (int i = 0; i < 30; ++i) view({wall, box});
+  for (int i = 0; i < 15; ++i) view({wall, box});
   const int before = boxPoints();
   EXPECT_GT(before, 3000);  // the 60 x 60 cm face at 1 cm
-  for (int i = 0; i < 60; ++i) view({wall});
+  for (int i = 0; i < 30; ++i) view({wall});
   const int after = boxPoints();
   std::cout << "points on the box's face: " << before << " while there, " << after
-            << " after 60 views without it\n";
+            << " after 30 views without it\n";
   EXPECT_EQ(after, 0);
 }
 
