@@ -22,8 +22,8 @@ void mapTo(const std::string& sequence, const std::string& map);
 // `sequence` mapped as mapTo() does, once, into a folder shared by every test and process that
 // asks for it by the same name (sharedDir()/maps); returns the map's path without extension
 // (PREFIX.pcd, PREFIX.session, PREFIX_keyframes.txt..., and what the program printed in
-// PREFIX_log.txt). Tests read it and never write beside it
-// (copyMap() first). The mapping program is $RGBDMAP_TEST_MAPPER when set: scripts/test.sh sets
+// PREFIX_log.txt). Tests read it and never write beside it (copyMap() first). The mapping
+// program is $RGBDMAP_TEST_MAPPER when set: scripts/test.sh sets
 // the release build's, so the sanitizer runs take the release run's maps (their tests judge what
 // is done with a map; mapping runs under the sanitizers in tests of its own). The folder is named
 // after that program's build, so a rebuilt program maps again.
