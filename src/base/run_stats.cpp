@@ -12,6 +12,15 @@ namespace {
 constexpr double kMinSeconds = 1e-6;
 constexpr double kBinsPerDecade = 100.0;
 
+std::string jsonString(const std::string& text) {
+  std::string quoted = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') quoted += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) quoted += c;
+  }
+  return quoted + "\"";
+}
+
 }  // namespace
 
 void LatencyHistogram::record(double seconds) {
@@ -90,6 +99,7 @@ std::string RunStats::toJson() const {
       << "  \"map_blocks_on_disk\": " << map_blocks_on_disk << ",\n"
       << "  \"map_disk_mb\": " << map_disk_mb << ",\n"
       << "  \"place_database_mb\": " << place_database_mb << ",\n"
+      << "  \"ground\": " << jsonString(ground) << ",\n"
       << "  \"latency\": {\n";
   latency("read", read_latency, false);
   latency("queue_wait", queue_latency, false);

@@ -217,6 +217,7 @@ int saveFinalMap(const Mapper& mapper, CheckpointWriter& writer,
   } else if (!final_write.path.empty()) {
     spdlog::info("map: {} points written to {}", final_write.points, final_write.path);
   }
+  stats.ground = final_write.ground;
   stats.peak_rss_mb = peakRssMb();
   stats.kept_keyframes_mb =
       static_cast<double>(mapper.keptKeyframes().memoryBytes()) / (1024.0 * 1024.0);

@@ -104,6 +104,9 @@ struct RunStats {
   std::uint64_t map_blocks_on_disk = 0;
   double map_disk_mb = 0.0;
   double place_database_mb = 0.0;  // loop closure's places (ORB features, dense references)
+  // Where up and the floor of the final map came from (--grid; "" without): the log says it
+  // when its sources change, which a slow run may do at a checkpoint of part of the map.
+  std::string ground;
 
   double wall_seconds = 0.0;
   double peak_rss_mb = 0.0;
