@@ -49,4 +49,11 @@ set(RGBDMAP_LONG_TESTS
   FleetMerger.AMergerRestartedFromItsSavedSessionPicksUpAgain
   FleetMerger.ARobotOnAMappedRouteIsPlacedWhereItIs
   KeptKeyframes.LapsOfTheRoomHoldAfterTheSixthWhatTheyHeldAfterTheSecond
+  # The floor of fr1/rpy's odometry map against its accelerometer (3.8 s; 46 s under ASan beside
+  # two others): the floor finder and the accelerometer's up run there on the synthetic room
+  # (OccupancyGrid.DrawsTheSyntheticRoomsFloorPlan)
+  GroundFrame.FloorOfARealMapAgreesWithTheAccelerometer
+  # The incidence rule's control, the same integration with the rule off (41 s under ASan; the
+  # rule's own test stays)
+  FreeSpace.DistancesAlongTheRayErodeTheGrazedFloor
 )
