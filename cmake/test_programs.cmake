@@ -43,8 +43,8 @@ function(rgbdmap_add_tests name)
     SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]" ${arg_PROPERTIES})
   # ctest -j starts the tests of highest COST first. A clean build has no timings of its own yet
   # (Testing/Temporary/CTestCostData.txt) and would start them in the order they are declared: the
-  # programs at scale come last, and their laps (65-140 s each on a clean run, rendering their
-  # sequences) ran at the end with a core idle.
+  # programs at scale come last, and their laps (40-260 s each in a clean run at ctest -j 3,
+  # rendering their sequences) ran at the end.
   if(arg_LABEL MATCHES "^scale$|master")
     set_tests_properties(${tests} PROPERTIES COST 60)
   endif()

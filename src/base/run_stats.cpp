@@ -12,6 +12,7 @@ namespace {
 constexpr double kMinSeconds = 1e-6;
 constexpr double kBinsPerDecade = 100.0;
 
+// `text` as a JSON string (control characters, which no message of ours holds, left out).
 std::string jsonString(const std::string& text) {
   std::string quoted = "\"";
   for (const char c : text) {
