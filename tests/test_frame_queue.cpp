@@ -103,7 +103,7 @@ TEST(FrameQueue, DropOldestUnderConcurrentSlowConsumer) {
       // The last frame waits for a frame of the pool to be free, as the next capture of a camera
       // that goes on would: a mapper stalled until the whole pool is queued drops the captures
       // in between (into the overflow frame), and on a loaded machine that stall can last to the
-      // end (a clean CI run: the consumer's last frame was 342 of 600).
+      // end (a clean run of .ci/run here: the consumer's last frame was 342 of 600).
       Frame* f = i + 1 < kFrames ? queue.acquire() : nullptr;
       while (!f && !(f = queue.tryAcquire())) std::this_thread::yield();
       ASSERT_NE(f, nullptr);

@@ -192,7 +192,7 @@ TEST(PipelineTracking, CheckpointsCarryThePerFrameTrajectory) {
   }
   EXPECT_EQ(p.wait(), 0) << test::readFile(dir + "/log.txt");
   // The final files hold every frame and keyframe mapped. A machine too slow for the pace drops
-  // frames or lets a keyframe go (a ThreadSanitizer run on a busy CI machine fused 9 of the 10):
+  // frames or lets a keyframe go (a clean run of .ci/run here fused 9 of the 10 under TSan):
   // how many is the stats file's to say, as fast machines map all 100 frames and 10 keyframes.
   const std::string stats = test::readFile(dir + "/stats.json");
   EXPECT_EQ(static_cast<double>(dataLines(dir + "/map_trajectory.txt")),
